@@ -1,0 +1,6 @@
+//! The `regolith` command line with the `Ellipse` shape added: what a user's plugin crate
+//! ships so its scenes can be run and checked.
+
+fn main() -> std::process::ExitCode {
+    regolith::cli::main_with(regolith::Regolith::default().add_plugin(ellipse_shape::EllipsePlugin))
+}

@@ -1,0 +1,90 @@
+//! A body is an entity; its material points are one struct-of-arrays component on it.
+//!
+//! One entity per point would cost random access and make sorting by cell impossible
+//! (ARCHITECTURE.md), so the columns live together here and the hot loops see plain slices.
+
+use bevy_ecs::prelude::*;
+use glam::{DMat2, DVec2};
+use serde::Serialize;
+
+use crate::stress::Stress;
+
+/// The material points of one body (SCIENCE.md 1).
+#[derive(Component, Clone, Debug, Default)]
+pub struct Points {
+    pub position: Vec<DVec2>,
+    pub velocity: Vec<DVec2>,
+    /// Mass per unit thickness (kg/m), constant.
+    pub mass: Vec<f64>,
+    /// Physical volume per unit thickness (m^2), updated from `tr L` each step.
+    pub volume: Vec<f64>,
+    /// Fixed integration half-width (m): half the initial point spacing, never updated.
+    pub half_width: Vec<f64>,
+    pub stress: Vec<Stress>,
+    /// Velocity gradient of the last step, `L_ab = d v_a / d x_b`.
+    pub velocity_gradient: Vec<DMat2>,
+    /// Grid velocity interpolated at the point in the last step (its advection velocity);
+    /// MUSL carries it from the velocity pass to the position update.
+    pub advection: Vec<DVec2>,
+}
+
+impl Points {
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// Bytes held per point (for memory estimates), not counting material history.
+    pub const BYTES_PER_POINT: usize = 16 + 16 + 8 + 8 + 8 + 32 + 32 + 16;
+}
+
+/// What a body is: its name and the facts the step needs about it.
+#[derive(Component, Clone, Debug)]
+pub struct Body {
+    pub name: String,
+    /// Position in the scene's body list.
+    pub index: usize,
+    /// Written to `trajectory.csv`.
+    pub tracked: bool,
+    /// Name of the body's material.
+    pub material: &'static str,
+    /// Elastic p-wave speed used by the CFL condition (m/s).
+    pub wave_speed: f64,
+}
+
+/// Whole-body quantities, refreshed in the Diagnostics set.
+#[derive(Component, Clone, Copy, Debug, Default, Serialize)]
+pub struct BodyState {
+    pub mass: f64,
+    pub centre_of_mass: DVec2,
+    pub velocity: DVec2,
+    pub kinetic_energy: f64,
+    /// Largest point speed.
+    pub max_speed: f64,
+}
+
+impl BodyState {
+    /// Mass-weighted sums over the body's points.
+    pub fn measure(points: &Points) -> BodyState {
+        let mut s = BodyState::default();
+        let mut moment = DVec2::ZERO;
+        let mut momentum = DVec2::ZERO;
+        for k in 0..points.len() {
+            let m = points.mass[k];
+            let v = points.velocity[k];
+            s.mass += m;
+            moment += m * points.position[k];
+            momentum += m * v;
+            s.kinetic_energy += 0.5 * m * v.length_squared();
+            s.max_speed = s.max_speed.max(v.length());
+        }
+        if s.mass > 0.0 {
+            s.centre_of_mass = moment / s.mass;
+            s.velocity = momentum / s.mass;
+        }
+        s
+    }
+}

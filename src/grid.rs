@@ -1,0 +1,117 @@
+//! The background grid: its geometry (a resource) and one body's nodal field (a component).
+//!
+//! Every body keeps its own nodal field so that contact can compare bodies node by node
+//! (SCIENCE.md 2 and 5). Fields are struct-of-arrays so the scatter and gather loops run over
+//! plain slices.
+
+use bevy_ecs::prelude::*;
+use glam::DVec2;
+
+/// Cartesian grid of square cells covering the rectangular domain.
+///
+/// Along an axis with periodic walls the last node column is identified with the first, so
+/// that axis has `cells` nodes; otherwise it has `cells + 1`.
+#[derive(Resource, Clone, Debug)]
+pub struct GridGeometry {
+    pub origin: DVec2,
+    pub cell_size: f64,
+    pub cells: [usize; 2],
+    pub periodic: [bool; 2],
+}
+
+impl GridGeometry {
+    /// Nodes along axis `a`.
+    pub fn nodes_along(&self, a: usize) -> usize {
+        if self.periodic[a] {
+            self.cells[a]
+        } else {
+            self.cells[a] + 1
+        }
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.nodes_along(0) * self.nodes_along(1)
+    }
+
+    /// Flat index of node `(i, j)`.
+    #[inline]
+    pub fn index(&self, i: usize, j: usize) -> usize {
+        j * self.nodes_along(0) + i
+    }
+
+    /// Position of node `(i, j)`.
+    pub fn node_position(&self, i: usize, j: usize) -> DVec2 {
+        self.origin + DVec2::new(i as f64, j as f64) * self.cell_size
+    }
+
+    /// Upper corner of the domain.
+    pub fn max(&self) -> DVec2 {
+        self.origin + DVec2::new(self.cells[0] as f64, self.cells[1] as f64) * self.cell_size
+    }
+
+    /// Domain extent.
+    pub fn size(&self) -> DVec2 {
+        self.max() - self.origin
+    }
+
+    /// Wraps a position back into the domain along periodic axes.
+    pub fn wrap(&self, mut x: DVec2) -> DVec2 {
+        let size = self.size();
+        for a in 0..2 {
+            if self.periodic[a] {
+                let rel = (x[a] - self.origin[a]).rem_euclid(size[a]);
+                x[a] = self.origin[a] + rel;
+            }
+        }
+        x
+    }
+}
+
+/// One body's nodal field, struct-of-arrays over all grid nodes.
+#[derive(Component, Clone, Debug, Default)]
+pub struct GridField {
+    pub mass: Vec<f64>,
+    /// Momentum at the start of the step, then the updated momentum.
+    pub momentum: Vec<DVec2>,
+    /// Total nodal force (gravity + internal + contact).
+    pub force: Vec<DVec2>,
+    /// Velocity at the end of the step (`v_i^{n+1}`).
+    pub velocity: Vec<DVec2>,
+    /// Acceleration over the step (`a_i = f_i / m_i`), used by the FLIP update.
+    pub acceleration: Vec<DVec2>,
+    /// Mass gradient `sum_p m_p grad S_ip`; filled only when contact needs normals.
+    pub mass_gradient: Vec<DVec2>,
+    /// Nodes lighter than this carry no velocity (SCIENCE.md 2, step 4).
+    pub mass_tolerance: f64,
+}
+
+impl GridField {
+    pub fn new(nodes: usize, mass_tolerance: f64, with_normals: bool) -> Self {
+        GridField {
+            mass: vec![0.0; nodes],
+            momentum: vec![DVec2::ZERO; nodes],
+            force: vec![DVec2::ZERO; nodes],
+            velocity: vec![DVec2::ZERO; nodes],
+            acceleration: vec![DVec2::ZERO; nodes],
+            mass_gradient: if with_normals {
+                vec![DVec2::ZERO; nodes]
+            } else {
+                Vec::new()
+            },
+            mass_tolerance,
+        }
+    }
+
+    /// Zeroes the accumulated quantities before a new scatter.
+    pub fn clear(&mut self) {
+        self.mass.fill(0.0);
+        self.momentum.fill(DVec2::ZERO);
+        self.force.fill(DVec2::ZERO);
+        self.mass_gradient.fill(DVec2::ZERO);
+    }
+
+    /// Bytes held per node (for memory estimates).
+    pub fn bytes_per_node(with_normals: bool) -> usize {
+        8 + 16 * if with_normals { 5 } else { 4 }
+    }
+}

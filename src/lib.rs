@@ -1,0 +1,36 @@
+//! regolith: a 2D plane-strain Material Point Method for projectiles hitting dry granular
+//! media, after Dunatunga & Kamrin (2017).
+//!
+//! A simulation is a bevy_ecs [`World`](bevy_ecs::world::World) stepped by a
+//! [`Schedule`](bevy_ecs::schedule::Schedule) of ordered system sets ([`step::StepSet`]).
+//! Bodies are entities whose material points ([`body::Points`]) and nodal field
+//! ([`grid::GridField`]) are struct-of-arrays components. Materials, shapes and outputs are
+//! plugins ([`plugin::Plugin`]) named in RON scene files ([`scene::Scene`]).
+//! See ARCHITECTURE.md for the layout and docs/scenes.md for the scene format.
+
+pub mod body;
+pub mod cli;
+pub mod contact;
+pub mod diagnostics;
+pub mod error;
+pub mod fill;
+pub mod grid;
+pub mod integration;
+pub mod material;
+pub mod output;
+pub mod plugin;
+pub mod registry;
+pub mod run;
+pub mod scene;
+pub mod shape;
+pub mod sim;
+pub mod step;
+pub mod stress;
+
+/// Re-exported for plugin crates: the ECS and vector types of the public API.
+pub use bevy_ecs;
+pub use glam;
+
+pub use plugin::{DefaultPlugins, Plugin, Regolith};
+pub use scene::Scene;
+pub use sim::Simulation;

@@ -1,0 +1,53 @@
+//! `summary.json`: what ran, how it ended, what it cost, and each body's final state.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+/// The whole summary. Field names are a public interface: extend, do not rename.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub scene_file: String,
+    /// The `--set` overrides applied.
+    pub overrides: Vec<String>,
+    /// `completed` or `failed`.
+    pub status: String,
+    /// Why a failed run stopped.
+    pub failure: Option<String>,
+    pub integration: String,
+    pub steps: u64,
+    /// Simulated time reached (s).
+    pub time: f64,
+    /// The time step: the fixed one, or the largest a CFL rule chose (s).
+    pub dt: f64,
+    pub dt_min: f64,
+    pub dt_max: f64,
+    /// `fixed` or `cfl`.
+    pub dt_rule: String,
+    /// Largest CFL number `dt (c + |v|max) / h` actually used.
+    pub cfl: f64,
+    pub particles: usize,
+    pub cells: [usize; 2],
+    pub cell_size: f64,
+    pub threads: usize,
+    pub wall_s: f64,
+    pub particle_steps_per_s: f64,
+    /// Wall time per step set (s).
+    pub timings_s: BTreeMap<String, f64>,
+    pub bodies: Vec<BodySummary>,
+}
+
+/// One body's final state.
+#[derive(Clone, Debug, Serialize)]
+pub struct BodySummary {
+    pub name: String,
+    pub material: String,
+    pub points: usize,
+    /// Mass per unit thickness (kg/m).
+    pub mass: f64,
+    pub centre_of_mass: [f64; 2],
+    pub velocity: [f64; 2],
+    /// Kinetic energy per unit thickness (J/m).
+    pub kinetic_energy: f64,
+}

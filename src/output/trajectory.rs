@@ -1,0 +1,106 @@
+//! `trajectory.csv`: time and centre-of-mass position and velocity of each tracked body.
+//!
+//! Columns: `t`, then `<body>_x, <body>_y, <body>_vx, <body>_vy` per tracked body in scene
+//! order. Rows are kept in memory (tests read them) and, when the run writes files, appended
+//! and flushed to `trajectory.csv.part` as they are made, so a failed run keeps them.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use bevy_ecs::prelude::*;
+
+use crate::body::{Body, BodyState};
+use crate::sim::Clock;
+
+#[derive(Resource, Debug, Default)]
+pub struct Trajectory {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+    sink: Option<(PathBuf, BufWriter<File>)>,
+    /// The first write error, reported by the runner.
+    pub write_error: Option<String>,
+}
+
+impl Trajectory {
+    /// An empty table for the tracked bodies, by name in scene order.
+    pub fn new(tracked: &[String]) -> Self {
+        let mut columns = vec!["t".to_string()];
+        for name in tracked {
+            for q in ["x", "y", "vx", "vy"] {
+                columns.push(format!("{name}_{q}"));
+            }
+        }
+        Trajectory {
+            columns,
+            ..Default::default()
+        }
+    }
+
+    /// Starts streaming rows to `<dir>/trajectory.csv.part`.
+    pub fn open(&mut self, dir: &Path) -> std::io::Result<()> {
+        let part = dir.join("trajectory.csv.part");
+        let mut w = BufWriter::new(File::create(&part)?);
+        writeln!(w, "{}", self.columns.join(","))?;
+        for row in &self.rows {
+            write_row(&mut w, row)?;
+        }
+        w.flush()?;
+        self.sink = Some((part, w));
+        Ok(())
+    }
+
+    /// Flushes and renames the streamed file to `trajectory.csv`.
+    pub fn close(&mut self) -> std::io::Result<()> {
+        if let Some((part, mut w)) = self.sink.take() {
+            w.flush()?;
+            w.get_ref().sync_all()?;
+            drop(w);
+            std::fs::rename(&part, part.with_extension(""))?;
+        }
+        Ok(())
+    }
+
+    /// The column index of `<body>_<quantity>`.
+    pub fn column(&self, body: &str, quantity: &str) -> Option<usize> {
+        let name = format!("{body}_{quantity}");
+        self.columns.iter().position(|c| *c == name)
+    }
+
+    /// One column as a vector.
+    pub fn series(&self, col: usize) -> Vec<f64> {
+        self.rows.iter().map(|r| r[col]).collect()
+    }
+}
+
+fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
+    let text: Vec<String> = row.iter().map(|v| format!("{v:e}")).collect();
+    writeln!(w, "{}", text.join(","))
+}
+
+/// Appends a row for the current time.
+pub fn record_trajectory(
+    clock: Res<Clock>,
+    mut table: ResMut<Trajectory>,
+    bodies: Query<(&Body, &BodyState)>,
+) {
+    let mut tracked: Vec<_> = bodies.iter().filter(|(b, _)| b.tracked).collect();
+    tracked.sort_by_key(|(b, _)| b.index);
+    let mut row = vec![clock.time];
+    for (_, s) in tracked {
+        row.extend([
+            s.centre_of_mass.x,
+            s.centre_of_mass.y,
+            s.velocity.x,
+            s.velocity.y,
+        ]);
+    }
+    let table = &mut *table;
+    if let Some((_, w)) = table.sink.as_mut() {
+        let result = write_row(w, &row).and_then(|_| w.flush());
+        if let (Err(e), None) = (result, &table.write_error) {
+            table.write_error = Some(e.to_string());
+        }
+    }
+    table.rows.push(row);
+}

@@ -1,0 +1,148 @@
+//! Running a scene to its end with files written: what `regolith run` does.
+//!
+//! Outputs land in the run directory as the run goes: `scene.ron` (the text that ran, with
+//! overrides applied), `trajectory.csv` (streamed as `trajectory.csv.part`, renamed at the
+//! end) and `summary.json` (written atomically last). A run that stops on a fault still
+//! writes all of them, with `"status": "failed"` and the reason in the summary.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use crate::error::{Error, Fault};
+use crate::grid::GridField;
+use crate::output::summary::{BodySummary, Summary};
+use crate::output::write_atomic;
+use crate::scene::{Scene, TimeStep};
+use crate::sim::{Clock, Simulation};
+use crate::step::StepSet;
+
+/// Where the scene came from, for the record.
+pub struct Provenance<'a> {
+    pub file: &'a str,
+    pub text: &'a str,
+    pub overrides: &'a [String],
+}
+
+/// Something told about each step (the command line draws a progress bar with it).
+pub trait Progress {
+    fn step(&mut self, clock: &Clock);
+}
+
+impl<F: FnMut(&Clock)> Progress for F {
+    fn step(&mut self, clock: &Clock) {
+        self(clock)
+    }
+}
+
+/// Runs `scene` to its end time writing into `out`; returns the summary, or the fault after
+/// the summary of the failed run has been written.
+pub fn run_scene(
+    scene: &Scene,
+    from: &Provenance,
+    out: &Path,
+    progress: &mut dyn Progress,
+) -> Result<Summary, Error> {
+    let io = |what: &str| {
+        let what = format!("{what} in {}", out.display());
+        move |e| Error::io(what, e)
+    };
+    std::fs::create_dir_all(out).map_err(io("cannot create the output directory"))?;
+    write_atomic(&out.join("scene.ron"), from.text.as_bytes())
+        .map_err(io("cannot write scene.ron"))?;
+    let mut sim = Simulation::with_output(scene, out).map_err(io("cannot start trajectory.csv"))?;
+    let started = Instant::now();
+    let result = sim.run(|c| progress.step(c));
+    let wall = started.elapsed().as_secs_f64();
+    sim.trajectory_mut()
+        .close()
+        .map_err(io("cannot finish trajectory.csv"))?;
+    let summary = summarize(&mut sim, scene, from, wall, result.as_ref().err());
+    let json = serde_json::to_string_pretty(&summary).expect("a summary always serialises");
+    write_atomic(&out.join("summary.json"), json.as_bytes())
+        .map_err(io("cannot write summary.json"))?;
+    result.map(|_| summary).map_err(Error::from)
+}
+
+/// The summary of a simulation in its current state.
+pub fn summarize(
+    sim: &mut Simulation,
+    scene: &Scene,
+    from: &Provenance,
+    wall_s: f64,
+    fault: Option<&Fault>,
+) -> Summary {
+    let clock = sim.clock().clone();
+    let grid = sim.grid().clone();
+    let bodies: Vec<BodySummary> = sim
+        .bodies()
+        .into_iter()
+        .map(|(b, s, n)| BodySummary {
+            name: b.name,
+            material: b.material.to_string(),
+            points: n,
+            mass: s.mass,
+            centre_of_mass: s.centre_of_mass.to_array(),
+            velocity: s.velocity.to_array(),
+            kinetic_energy: s.kinetic_energy,
+        })
+        .collect();
+    let particles: usize = bodies.iter().map(|b| b.points).sum();
+    let timings_s: BTreeMap<String, f64> = StepSet::ALL
+        .iter()
+        .zip(sim.timings().per_set)
+        .map(|(set, d)| (set.label().to_string(), d.as_secs_f64()))
+        .collect();
+    let (dt_rule, dt) = match clock.rule {
+        TimeStep::Fixed(dt) => ("fixed", dt),
+        TimeStep::Cfl(_) => ("cfl", clock.dt_max),
+    };
+    Summary {
+        scene: scene.name.clone(),
+        scene_file: from.file.to_string(),
+        overrides: from.overrides.to_vec(),
+        status: if fault.is_some() {
+            "failed"
+        } else {
+            "completed"
+        }
+        .to_string(),
+        failure: fault.map(|f| f.to_string()),
+        integration: format!("{:?}", scene.integration),
+        steps: clock.step,
+        time: clock.time,
+        dt,
+        dt_min: if clock.step > 0 { clock.dt_min } else { 0.0 },
+        dt_max: clock.dt_max,
+        dt_rule: dt_rule.to_string(),
+        cfl: clock.cfl_max,
+        particles,
+        cells: grid.cells,
+        cell_size: grid.cell_size,
+        threads: rayon::current_num_threads(),
+        wall_s,
+        particle_steps_per_s: if wall_s > 0.0 {
+            particles as f64 * clock.step as f64 / wall_s
+        } else {
+            0.0
+        },
+        timings_s,
+        bodies,
+    }
+}
+
+/// Rough memory use of a scene's state in bytes: points, material history and one nodal
+/// field per body.
+pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
+    let nodes = sim.grid().node_count();
+    let counts: Vec<usize> = sim.bodies().iter().map(|b| b.2).collect();
+    scene
+        .bodies
+        .iter()
+        .zip(counts)
+        .map(|(spec, n)| {
+            n * (crate::body::Points::BYTES_PER_POINT + spec.material.history_bytes())
+                + nodes * GridField::bytes_per_node(false)
+        })
+        .sum()
+}

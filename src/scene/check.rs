@@ -1,0 +1,240 @@
+//! Whole-scene checks: the values no single field can judge on its own.
+
+use std::collections::HashSet;
+
+use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
+use crate::error::SceneError;
+use crate::fill::fill;
+use crate::grid::GridGeometry;
+use crate::integration::Integration;
+
+/// The 1-based line of the first occurrence of `needle` in `text`, if any.
+fn line_of(text: &str, needle: &str) -> Option<usize> {
+    let at = text.find(needle)?;
+    Some(text[..at].matches('\n').count() + 1)
+}
+
+/// An error pointing at the line where `needle` first appears (the file alone otherwise).
+fn near(text: &str, origin: &str, needle: &str, message: String) -> SceneError {
+    match line_of(text, needle) {
+        Some(line) => SceneError {
+            file: origin.to_string(),
+            line: Some(line),
+            column: None,
+            message,
+        },
+        None => SceneError::file(origin, message),
+    }
+}
+
+fn positive_finite(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+impl Scene {
+    /// The grid this scene's domain and walls describe (assumes a checked scene).
+    pub fn grid(&self) -> GridGeometry {
+        let (nx, ny) = self.domain.cells;
+        GridGeometry {
+            origin: self.domain.origin,
+            cell_size: self.domain.size.x / nx as f64,
+            cells: [nx, ny],
+            periodic: [
+                self.walls.left == Wall::Periodic,
+                self.walls.bottom == Wall::Periodic,
+            ],
+        }
+    }
+
+    /// Choices that are allowed but known to misbehave, one sentence each.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.integration == Integration::Linear && self.update == StressUpdate::Usl {
+            w.push(
+                "Linear integration with update Usl amplifies round-off at nodes of tiny mass and can blow up (docs/numerics.md); CpdiFixed or update: Musl avoid it"
+                    .to_string(),
+            );
+        }
+        w
+    }
+
+    /// Everything that can be wrong with a well-typed scene. `text` (possibly empty) is the
+    /// source, used to point at a line.
+    pub(super) fn check(&self, text: &str, origin: &str) -> Result<(), SceneError> {
+        let err = |needle: &str, message: String| Err(near(text, origin, needle, message));
+        if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
+            return err(
+                "name",
+                format!(
+                    "name must be a non-empty word without slashes, got {:?}",
+                    self.name
+                ),
+            );
+        }
+        let d = &self.domain;
+        if !(d.origin.is_finite() && positive_finite(d.size.x) && positive_finite(d.size.y)) {
+            return err(
+                "size",
+                format!(
+                    "domain size must be two positive numbers (m), got ({}, {})",
+                    d.size.x, d.size.y
+                ),
+            );
+        }
+        if d.cells.0 == 0 || d.cells.1 == 0 || d.cells.0 > 100_000 || d.cells.1 > 100_000 {
+            return err(
+                "cells",
+                format!(
+                    "domain cells must be between 1 and 100000 along each axis, got ({}, {})",
+                    d.cells.0, d.cells.1
+                ),
+            );
+        }
+        let (hx, hy) = (d.size.x / d.cells.0 as f64, d.size.y / d.cells.1 as f64);
+        if (hx - hy).abs() > 1e-9 * hx.max(hy) {
+            return err(
+                "cells",
+                format!("cells must be square: size/cells gives {hx} m along x but {hy} m along y"),
+            );
+        }
+        let t = &self.time;
+        if !positive_finite(t.end) {
+            return err(
+                "end",
+                format!(
+                    "time.end must be a positive number of seconds, got {}",
+                    t.end
+                ),
+            );
+        }
+        if !positive_finite(t.output_every) {
+            return err(
+                "output_every",
+                format!(
+                    "time.output_every must be a positive number of seconds, got {}",
+                    t.output_every
+                ),
+            );
+        }
+        match t.step {
+            TimeStep::Fixed(dt) if !positive_finite(dt) => {
+                return err(
+                    "Fixed",
+                    format!("a fixed time step must be a positive number of seconds, got {dt}"),
+                );
+            }
+            TimeStep::Cfl(c) if !(positive_finite(c) && c <= 1.0) => {
+                return err("Cfl", format!("the CFL number must lie in (0, 1], got {c}"));
+            }
+            _ => {}
+        }
+        if !self.gravity.is_finite() {
+            return err(
+                "gravity",
+                "gravity must be two finite numbers (m/s^2)".to_string(),
+            );
+        }
+        let w = &self.walls;
+        if (w.left == Wall::Periodic) != (w.right == Wall::Periodic)
+            || (w.bottom == Wall::Periodic) != (w.top == Wall::Periodic)
+        {
+            return err(
+                "walls",
+                "a periodic wall needs a periodic opposite wall".to_string(),
+            );
+        }
+        if !(self.flip.is_finite() && (0.0..=1.0).contains(&self.flip)) {
+            return err(
+                "flip",
+                format!("flip must lie in [0, 1] (1 = pure FLIP), got {}", self.flip),
+            );
+        }
+        if self.bodies.is_empty() {
+            return err("bodies", "the scene needs at least one body".to_string());
+        }
+        self.check_bodies(text, origin)
+    }
+
+    fn check_bodies(&self, text: &str, origin: &str) -> Result<(), SceneError> {
+        let grid = self.grid();
+        let (dmin, dmax) = (grid.origin, grid.max());
+        let mut names = HashSet::new();
+        let mut lattices = Vec::new();
+        for b in &self.bodies {
+            let needle = format!("\"{}\"", b.name);
+            let err = |message: String| {
+                Err(near(
+                    text,
+                    origin,
+                    &needle,
+                    format!("body \"{}\": {message}", b.name),
+                ))
+            };
+            if !names.insert(b.name.as_str()) {
+                return err("another body has the same name".to_string());
+            }
+            if !(1..=16).contains(&b.points_per_cell) {
+                return err(format!(
+                    "points_per_cell must be between 1 and 16, got {}",
+                    b.points_per_cell
+                ));
+            }
+            if !b.velocity.is_finite() {
+                return err("velocity must be two finite numbers (m/s)".to_string());
+            }
+            if b.initial_stress == InitialStress::Lithostatic && self.gravity.x != 0.0 {
+                return err(
+                    "a lithostatic initial stress needs gravity along -y (gravity.x = 0)"
+                        .to_string(),
+                );
+            }
+            let (lo, hi) = b.shape.bounds();
+            let tol = 1e-9 * grid.cell_size;
+            if lo.x < dmin.x - tol
+                || lo.y < dmin.y - tol
+                || hi.x > dmax.x + tol
+                || hi.y > dmax.y + tol
+            {
+                return err(format!(
+                    "its {} spans ({:.4}, {:.4})..({:.4}, {:.4}), outside the domain ({:.4}, {:.4})..({:.4}, {:.4})",
+                    b.shape.name(),
+                    lo.x,
+                    lo.y,
+                    hi.x,
+                    hi.y,
+                    dmin.x,
+                    dmin.y,
+                    dmax.x,
+                    dmax.y
+                ));
+            }
+            let lattice = fill(&*b.shape, &grid, b.points_per_cell);
+            if lattice.positions.is_empty() {
+                return err(format!(
+                    "its shape holds no material point at {} points per cell (cell size {} m); refine the grid or enlarge the body",
+                    b.points_per_cell, grid.cell_size
+                ));
+            }
+            lattices.push(lattice);
+        }
+        for (a, la) in self.bodies.iter().zip(&lattices) {
+            for b in &self.bodies {
+                if std::ptr::eq(a, b) {
+                    continue;
+                }
+                if let Some(p) = la.positions.iter().find(|p| b.shape.contains(**p)) {
+                    return Err(near(
+                        text,
+                        origin,
+                        &format!("\"{}\"", a.name),
+                        format!(
+                            "bodies \"{}\" and \"{}\" overlap (e.g. at ({:.4}, {:.4})); bodies must start apart",
+                            a.name, b.name, p.x, p.y
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,214 @@
+//! The RON scene format: what a user writes to describe a run (documented in docs/scenes.md).
+//!
+//! Parsing has three layers, each reporting where it can: RON syntax and types (line and
+//! column from `ron`), each plugin item's own physical checks (run while it is deserialised,
+//! so they get a position too), and whole-scene checks such as a body outside the domain
+//! (reported with the body's name and the line it is declared on).
+
+mod check;
+mod overrides;
+
+use std::path::Path;
+use std::rc::Rc;
+
+use glam::DVec2;
+use serde::Deserialize;
+
+use crate::contact::Contact;
+use crate::error::SceneError;
+use crate::integration::Integration;
+use crate::material::MaterialSpec;
+use crate::output::OutputSpec;
+use crate::registry::{Named, Registries, with_registries};
+use crate::shape::ShapeSpec;
+
+/// A whole scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Used for the default output directory `out/<name>/`.
+    pub name: String,
+    /// Free text shown by `regolith check` (e.g. "coarse CI variant of ...").
+    #[serde(default)]
+    pub description: String,
+    pub domain: Domain,
+    pub time: TimeSettings,
+    /// Body force per unit mass (m/s^2); default `(0.0, -9.81)`.
+    #[serde(default = "default_gravity")]
+    pub gravity: DVec2,
+    pub walls: Walls,
+    /// Shape-function scheme; default `CpdiFixed` (the paper's).
+    #[serde(default)]
+    pub integration: Integration,
+    /// Where the velocity gradient comes from: `Usl` (the paper) or `Musl`; default `Usl`.
+    #[serde(default)]
+    pub update: StressUpdate,
+    /// How bodies interact where they share grid nodes; default `NoSlip`.
+    #[serde(default)]
+    pub contact: Contact,
+    /// FLIP fraction of the point velocity update: 1 is pure FLIP (the paper), 0 pure PIC.
+    #[serde(default = "default_flip")]
+    pub flip: f64,
+    pub bodies: Vec<BodySpec>,
+    /// Extra outputs (e.g. `Snapshots(every: 0.01)`); `summary.json` and `trajectory.csv`
+    /// are always written.
+    #[serde(default)]
+    pub outputs: Vec<Named<dyn OutputSpec>>,
+}
+
+fn default_gravity() -> DVec2 {
+    DVec2::new(0.0, -9.81)
+}
+
+fn default_flip() -> f64 {
+    1.0
+}
+
+/// The update-stress-last variant (docs/numerics.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum StressUpdate {
+    /// `L` from the updated grid velocity `(mv)/m` (the paper's choice). With `Linear`
+    /// integration, nodes of tiny mass make it unstable (docs/numerics.md).
+    #[default]
+    Usl,
+    /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
+    /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
+    Musl,
+}
+
+/// The rectangular domain and its grid of square cells.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    /// Lower-left corner; default `(0.0, 0.0)`.
+    #[serde(default)]
+    pub origin: DVec2,
+    /// Width and height (m).
+    pub size: DVec2,
+    /// Cells along x and y; cells must be square.
+    pub cells: (usize, usize),
+}
+
+/// End time, time step and output interval.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSettings {
+    /// Simulated end time (s).
+    pub end: f64,
+    pub step: TimeStep,
+    /// Interval between rows of `trajectory.csv` (s).
+    pub output_every: f64,
+}
+
+/// How the time step is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub enum TimeStep {
+    /// A fixed step (s).
+    Fixed(f64),
+    /// `dt = C h / max_b (c_b + max |v_p|)`, recomputed every step.
+    Cfl(f64),
+}
+
+/// The four sides of the domain.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Walls {
+    pub left: Wall,
+    pub right: Wall,
+    pub bottom: Wall,
+    pub top: Wall,
+}
+
+/// Boundary condition on one side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum Wall {
+    /// No constraint: material leaving the domain stops the run.
+    Free,
+    /// Frictionless: the normal velocity is zero, the tangential one free.
+    Slip,
+    /// Both velocity components are zero.
+    NoSlip,
+    /// Wraps to the opposite side (which must be periodic too).
+    Periodic,
+}
+
+/// One body.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    pub name: String,
+    pub shape: Named<dyn ShapeSpec>,
+    pub material: Named<dyn MaterialSpec>,
+    /// Material points per cell along each direction (2 gives the paper's 2x2 at quadrant
+    /// centres); default 2.
+    #[serde(default = "default_ppc")]
+    pub points_per_cell: usize,
+    /// Initial velocity (m/s); default zero.
+    #[serde(default)]
+    pub velocity: DVec2,
+    /// Initial stress; default `None`.
+    #[serde(default)]
+    pub initial_stress: InitialStress,
+    /// Whether the body's centre of mass goes into `trajectory.csv`; default false.
+    #[serde(default)]
+    pub tracked: bool,
+}
+
+fn default_ppc() -> usize {
+    2
+}
+
+/// How a body's stress starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum InitialStress {
+    /// Stress free.
+    #[default]
+    None,
+    /// In equilibrium under gravity (which must point along -y): `T_yy = -rho g (H - y)` below
+    /// the body's top surface `H` at each x, lateral components from the material's ratio.
+    Lithostatic,
+}
+
+impl Scene {
+    /// Parses RON text; `origin` names the file in messages.
+    pub fn parse(
+        text: &str,
+        origin: &str,
+        registries: &Rc<Registries>,
+    ) -> Result<Scene, SceneError> {
+        let scene: Scene = with_registries(registries, || ron::from_str(text)).map_err(|e| {
+            SceneError::at(
+                origin,
+                e.span.start.line,
+                e.span.start.col,
+                e.code.to_string(),
+            )
+        })?;
+        scene.check(text, origin)?;
+        Ok(scene)
+    }
+
+    /// Reads and parses a scene file after applying `key.path=value` overrides (the command
+    /// line's `--set`). Values are RON (`0.5`, `(0.0, -3.5)`, `Cfl(0.2)`, `"name"`); list
+    /// items are addressed by index or, for items with a `name`, by name
+    /// (`bodies.intruder.velocity=(0, -3)`). Returns the scene and the text it was read from.
+    pub fn load(
+        path: &Path,
+        sets: &[String],
+        registries: &Rc<Registries>,
+    ) -> Result<(Scene, String), SceneError> {
+        let origin = path.display().to_string();
+        let mut text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::file(&origin, format!("cannot read the scene: {e}")))?;
+        for s in sets {
+            text = overrides::set_in_text(&text, s)
+                .map_err(|e| SceneError::file(&format!("{origin} (--set {s})"), e))?;
+        }
+        let origin = if sets.is_empty() {
+            origin
+        } else {
+            format!("{origin} (after --set {})", sets.join(" --set "))
+        };
+        Ok((Scene::parse(&text, &origin, registries)?, text))
+    }
+}

@@ -1,0 +1,178 @@
+//! The built-in shapes: rectangle, disc and simple polygon.
+
+use glam::DVec2;
+use serde::Deserialize;
+
+use super::{Shape, finite, positive};
+
+/// `Rectangle(min: (x, y), max: (x, y))`: an axis-aligned rectangle.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rectangle {
+    pub min: DVec2,
+    pub max: DVec2,
+}
+
+impl Shape for Rectangle {
+    const NAME: &'static str = "Rectangle";
+    fn validate(&self) -> Result<(), String> {
+        for (n, v) in [("min.x", self.min.x), ("min.y", self.min.y)] {
+            finite(n, v)?;
+        }
+        let size = self.max - self.min;
+        positive("width (max.x - min.x)", size.x)?;
+        positive("height (max.y - min.y)", size.y)
+    }
+    fn contains(&self, p: DVec2) -> bool {
+        p.x >= self.min.x && p.x < self.max.x && p.y >= self.min.y && p.y < self.max.y
+    }
+    fn bounds(&self) -> (DVec2, DVec2) {
+        (self.min, self.max)
+    }
+}
+
+/// `Disc(centre: (x, y), radius: r)`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Disc {
+    pub centre: DVec2,
+    pub radius: f64,
+}
+
+impl Shape for Disc {
+    const NAME: &'static str = "Disc";
+    fn validate(&self) -> Result<(), String> {
+        finite("centre.x", self.centre.x)?;
+        finite("centre.y", self.centre.y)?;
+        positive("radius", self.radius)
+    }
+    fn contains(&self, p: DVec2) -> bool {
+        (p - self.centre).length_squared() < self.radius * self.radius
+    }
+    fn bounds(&self) -> (DVec2, DVec2) {
+        (
+            self.centre - DVec2::splat(self.radius),
+            self.centre + DVec2::splat(self.radius),
+        )
+    }
+}
+
+/// `Polygon(vertices: [(x, y), ...])`: a simple (non self-intersecting) polygon, either winding.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Polygon {
+    pub vertices: Vec<DVec2>,
+}
+
+impl Polygon {
+    fn edges(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+        let n = self.vertices.len();
+        (0..n).map(move |i| (self.vertices[i], self.vertices[(i + 1) % n]))
+    }
+
+    /// Signed area (positive when anticlockwise).
+    pub fn signed_area(&self) -> f64 {
+        0.5 * self.edges().map(|(a, b)| a.perp_dot(b)).sum::<f64>()
+    }
+}
+
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o1 = (b - a).perp_dot(c - a);
+    let o2 = (b - a).perp_dot(d - a);
+    let o3 = (d - c).perp_dot(a - c);
+    let o4 = (d - c).perp_dot(b - c);
+    o1 * o2 < 0.0 && o3 * o4 < 0.0
+}
+
+impl Shape for Polygon {
+    const NAME: &'static str = "Polygon";
+    fn validate(&self) -> Result<(), String> {
+        if self.vertices.len() < 3 {
+            return Err(format!(
+                "a polygon needs at least 3 vertices, got {}",
+                self.vertices.len()
+            ));
+        }
+        for (i, v) in self.vertices.iter().enumerate() {
+            finite(&format!("vertices[{i}].x"), v.x)?;
+            finite(&format!("vertices[{i}].y"), v.y)?;
+        }
+        if self.signed_area().abs() <= 0.0 {
+            return Err("the polygon has zero area".into());
+        }
+        let e: Vec<_> = self.edges().collect();
+        for i in 0..e.len() {
+            for j in i + 2..e.len() {
+                if i == 0 && j == e.len() - 1 {
+                    continue;
+                }
+                if segments_cross(e[i].0, e[i].1, e[j].0, e[j].1) {
+                    return Err(format!("the polygon's edges {i} and {j} cross each other"));
+                }
+            }
+        }
+        Ok(())
+    }
+    fn contains(&self, p: DVec2) -> bool {
+        // Even-odd rule with a horizontal ray.
+        let mut inside = false;
+        for (a, b) in self.edges() {
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if p.x < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+    fn bounds(&self) -> (DVec2, DVec2) {
+        let min = self.vertices.iter().fold(DVec2::INFINITY, |m, v| m.min(*v));
+        let max = self
+            .vertices
+            .iter()
+            .fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
+        (min, max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polygon_contains_matches_a_rectangle() {
+        let poly = Polygon {
+            vertices: vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(2.0, 0.0),
+                DVec2::new(2.0, 1.0),
+                DVec2::new(0.0, 1.0),
+            ],
+        };
+        let rect = Rectangle {
+            min: DVec2::ZERO,
+            max: DVec2::new(2.0, 1.0),
+        };
+        assert!((poly.signed_area() - 2.0).abs() < 1e-12);
+        for i in 0..50 {
+            for j in 0..30 {
+                let p = DVec2::new(-0.5 + i as f64 * 0.061, -0.5 + j as f64 * 0.067);
+                assert_eq!(poly.contains(p), rect.contains(p), "at {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn bow_tie_is_rejected() {
+        let poly = Polygon {
+            vertices: vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(1.0, 1.0),
+                DVec2::new(1.0, 0.0),
+                DVec2::new(0.0, 1.0),
+            ],
+        };
+        assert!(Shape::validate(&poly).unwrap_err().contains("cross"));
+    }
+}

@@ -1,0 +1,307 @@
+//! A simulation: the ECS world built from a scene, and the schedule that steps it.
+
+use std::collections::BTreeSet;
+
+use bevy_ecs::prelude::*;
+use glam::{DMat2, DVec2};
+
+use crate::body::{Body, BodyState, Points};
+use crate::contact::{self, Contact};
+use crate::diagnostics::Health;
+use crate::error::Fault;
+use crate::fill::fill;
+use crate::grid::{GridField, GridGeometry};
+use crate::output::RunDir;
+use crate::output::trajectory::Trajectory;
+use crate::scene::{BodySpec, InitialStress, Scene, TimeStep, Walls};
+use crate::step::{self, StepSet, Timings};
+use crate::stress::Stress;
+
+/// Simulated time and the time-step bookkeeping.
+#[derive(Resource, Clone, Debug)]
+pub struct Clock {
+    pub time: f64,
+    pub dt: f64,
+    pub step: u64,
+    pub end: f64,
+    pub rule: TimeStep,
+    /// True only while the t = 0 state is being observed (no step is taken).
+    pub observing: bool,
+    /// This step lands on the end time.
+    pub last_step: bool,
+    pub output_every: f64,
+    pub next_output: f64,
+    pub output_due: bool,
+    pub dt_min: f64,
+    pub dt_max: f64,
+    /// Largest CFL number used so far.
+    pub cfl_max: f64,
+}
+
+/// Body force per unit mass.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct Gravity(pub DVec2);
+
+/// The walls of the domain.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct Boundaries(pub Walls);
+
+/// FLIP fraction of the point velocity update.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct FlipRatio(pub f64);
+
+/// A ready-to-step simulation.
+pub struct Simulation {
+    pub world: World,
+    schedule: Schedule,
+}
+
+/// Mass tolerance of a body's nodes: `1e-8 rho h^2` per unit thickness (SCIENCE.md 2, step 4).
+fn mass_tolerance(density: f64, h: f64) -> f64 {
+    1e-8 * density * h * h
+}
+
+/// Initial stress of each lattice point.
+fn initial_stresses(
+    spec: &BodySpec,
+    positions: &[DVec2],
+    spacing: f64,
+    gravity: DVec2,
+) -> Vec<Stress> {
+    match spec.initial_stress {
+        InitialStress::None => vec![Stress::ZERO; positions.len()],
+        InitialStress::Lithostatic => {
+            // The body's top surface above each lattice column.
+            let column = |x: f64| (x / spacing).floor() as i64;
+            let mut top = std::collections::HashMap::new();
+            for p in positions {
+                let t = top.entry(column(p.x)).or_insert(f64::NEG_INFINITY);
+                *t = f64::max(*t, p.y + 0.5 * spacing);
+            }
+            let rho = spec.material.density();
+            let k0 = spec.material.lithostatic_ratio();
+            positions
+                .iter()
+                .map(|p| {
+                    let syy = rho * gravity.y * (top[&column(p.x)] - p.y);
+                    Stress {
+                        xx: k0 * syy,
+                        yy: syy,
+                        xy: 0.0,
+                        zz: k0 * syy,
+                    }
+                })
+                .collect()
+        }
+    }
+}
+
+impl Simulation {
+    /// Builds the world and schedule of a checked scene and observes the t = 0 state,
+    /// keeping every output in memory only.
+    pub fn new(scene: &Scene) -> Simulation {
+        Simulation::build(scene, None).expect("no files are written without a directory")
+    }
+
+    /// As [`Simulation::new`], also writing outputs into `dir` (which must exist).
+    pub fn with_output(scene: &Scene, dir: &std::path::Path) -> std::io::Result<Simulation> {
+        Simulation::build(scene, Some(dir))
+    }
+
+    fn build(scene: &Scene, dir: Option<&std::path::Path>) -> std::io::Result<Simulation> {
+        let grid = scene.grid();
+        let mut world = World::new();
+        let mut schedule = step::build_schedule(scene.integration, scene.update);
+        let multi_body = scene.bodies.len() > 1;
+        let mut materials = BTreeSet::new();
+        let mut tracked = Vec::new();
+        for (index, spec) in scene.bodies.iter().enumerate() {
+            let lattice = fill(&*spec.shape, &grid, spec.points_per_cell);
+            let n = lattice.positions.len();
+            let density = spec.material.density();
+            let mass = density * lattice.spacing * lattice.spacing;
+            let stress = initial_stresses(spec, &lattice.positions, lattice.spacing, scene.gravity);
+            let volume = stress
+                .iter()
+                .map(|s| spec.material.initial_volume(mass, s))
+                .collect();
+            let points = Points {
+                position: lattice.positions,
+                velocity: vec![spec.velocity; n],
+                mass: vec![mass; n],
+                volume,
+                half_width: vec![0.5 * lattice.spacing; n],
+                stress,
+                velocity_gradient: vec![DMat2::ZERO; n],
+                advection: vec![spec.velocity; n],
+            };
+            let body = Body {
+                name: spec.name.clone(),
+                index,
+                tracked: spec.tracked,
+                material: spec.material.name(),
+                wave_speed: spec.material.wave_speed(),
+            };
+            if spec.tracked {
+                tracked.push(spec.name.clone());
+            }
+            let field = GridField::new(
+                grid.node_count(),
+                mass_tolerance(density, grid.cell_size),
+                false,
+            );
+            let mut entity = world.spawn((body, points, field, BodyState::default()));
+            spec.material.attach(&mut entity, n);
+            if materials.insert(spec.material.name()) {
+                spec.material.add_systems(&mut schedule);
+            }
+        }
+        if multi_body {
+            match scene.contact {
+                Contact::NoSlip => {
+                    schedule.add_systems(contact::no_slip.in_set(StepSet::Contact));
+                }
+            }
+        }
+        for output in &scene.outputs {
+            output.install(&mut world, &mut schedule);
+        }
+        world.insert_resource(grid);
+        world.insert_resource(Clock {
+            time: 0.0,
+            dt: 0.0,
+            step: 0,
+            end: scene.time.end,
+            rule: scene.time.step,
+            observing: true,
+            last_step: false,
+            output_every: scene.time.output_every,
+            next_output: 0.0,
+            output_due: false,
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+            cfl_max: 0.0,
+        });
+        world.insert_resource(Gravity(scene.gravity));
+        world.insert_resource(Boundaries(scene.walls));
+        world.insert_resource(FlipRatio(scene.flip));
+        world.insert_resource(Health::default());
+        world.insert_resource(Timings::default());
+        let mut trajectory = Trajectory::new(&tracked);
+        if let Some(dir) = dir {
+            trajectory.open(dir)?;
+        }
+        world.insert_resource(trajectory);
+        world.insert_resource(RunDir(dir.map(|d| d.to_path_buf())));
+        let mut sim = Simulation { world, schedule };
+        // Diagnostics and Output on the t = 0 state, without a step.
+        sim.schedule.run(&mut sim.world);
+        sim.world.resource_mut::<Clock>().observing = false;
+        Ok(sim)
+    }
+
+    /// Takes one step; a fault (non-finite state, escaped point, write error) stops it.
+    pub fn step(&mut self) -> Result<(), Fault> {
+        self.world.resource_mut::<Timings>().restart();
+        self.schedule.run(&mut self.world);
+        if let Some(f) = &self.world.resource::<Health>().fault {
+            return Err(f.clone());
+        }
+        if let Some(e) = &self.world.resource::<Trajectory>().write_error {
+            let c = self.clock();
+            return Err(Fault {
+                step: c.step,
+                time: c.time,
+                message: format!("cannot write trajectory.csv: {e}"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Whether the end time has been reached.
+    pub fn finished(&self) -> bool {
+        let c = self.clock();
+        c.time >= c.end
+    }
+
+    /// Steps to the end time, calling `each` after every step.
+    pub fn run(&mut self, mut each: impl FnMut(&Clock)) -> Result<(), Fault> {
+        while !self.finished() {
+            self.step()?;
+            each(self.clock());
+        }
+        Ok(())
+    }
+
+    pub fn clock(&self) -> &Clock {
+        self.world.resource::<Clock>()
+    }
+
+    pub fn grid(&self) -> &GridGeometry {
+        self.world.resource::<GridGeometry>()
+    }
+
+    pub fn trajectory(&self) -> &Trajectory {
+        self.world.resource::<Trajectory>()
+    }
+
+    pub fn trajectory_mut(&mut self) -> Mut<'_, Trajectory> {
+        self.world.resource_mut::<Trajectory>()
+    }
+
+    pub fn timings(&self) -> &Timings {
+        self.world.resource::<Timings>()
+    }
+
+    /// Bodies in scene order with their points and state.
+    pub fn bodies(&mut self) -> Vec<(Body, BodyState, usize)> {
+        let mut q = self.world.query::<(&Body, &BodyState, &Points)>();
+        let mut v: Vec<_> = q
+            .iter(&self.world)
+            .map(|(b, s, p)| (b.clone(), *s, p.len()))
+            .collect();
+        v.sort_by_key(|(b, _, _)| b.index);
+        v
+    }
+
+    /// The points of the body called `name`.
+    pub fn points(&mut self, name: &str) -> Option<&Points> {
+        let mut q = self.world.query::<(&Body, &Points)>();
+        q.iter(&self.world)
+            .find(|(b, _)| b.name == name)
+            .map(|(_, p)| p)
+    }
+
+    /// Mutable points of the body called `name` (for tests that prescribe a state).
+    pub fn points_mut(&mut self, name: &str) -> Option<Mut<'_, Points>> {
+        let mut q = self.world.query::<(&Body, &mut Points)>();
+        q.iter_mut(&mut self.world)
+            .find(|(b, _)| b.name == name)
+            .map(|(_, p)| p)
+    }
+
+    /// The nodal field of the body called `name`.
+    pub fn grid_field(&mut self, name: &str) -> Option<&GridField> {
+        let mut q = self.world.query::<(&Body, &GridField)>();
+        q.iter(&self.world)
+            .find(|(b, _)| b.name == name)
+            .map(|(_, f)| f)
+    }
+
+    pub fn particle_count(&mut self) -> usize {
+        self.bodies().iter().map(|b| b.2).sum()
+    }
+
+    /// The time step the scene's rule gives for the current state, and its CFL number.
+    pub fn next_time_step(&mut self) -> (f64, f64) {
+        let h = self.grid().cell_size;
+        let mut q = self.world.query::<(&Body, &BodyState)>();
+        let signal = step::signal_speed(q.iter(&self.world));
+        let dt = match self.clock().rule {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
+            TimeStep::Cfl(_) => self.clock().end,
+        };
+        (dt, dt * signal / h)
+    }
+}

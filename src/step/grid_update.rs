@@ -1,0 +1,103 @@
+//! Nodal momentum update and walls (SCIENCE.md 2, steps 2-4).
+//!
+//! `(mv) += dt f`, `a = f/m`, `v = (mv)/m` on nodes heavier than the body's mass tolerance.
+//! Lighter nodes (SCIENCE.md 2, step 4) drop their internal force, whose acceleration
+//! `f/m` is unbounded as `m -> 0` with linear shape functions, but keep the velocity of
+//! their few contributing points plus gravity: `a = g`, `v = (mv)/m + dt g`. Zeroing their
+//! velocity instead, as SCIENCE.md suggests, gives every contributing point a spurious
+//! velocity gradient `-v (outer) grad S` of order `|v|/h`; the free-fall test caught a body
+//! blowing up that way (docs/numerics.md). Empty nodes get zero velocity.
+//! Walls then zero the normal (Slip) or both (NoSlip) components of force, momentum,
+//! velocity and acceleration on their nodes.
+
+use bevy_ecs::prelude::*;
+use glam::DVec2;
+
+use crate::grid::{GridField, GridGeometry};
+use crate::scene::{Wall, Walls};
+use crate::sim::{Boundaries, Clock, Gravity};
+
+pub fn update_grid(
+    clock: Res<Clock>,
+    grid: Res<GridGeometry>,
+    gravity: Res<Gravity>,
+    walls: Res<Boundaries>,
+    mut fields: Query<&mut GridField>,
+) {
+    let dt = clock.dt;
+    let g = gravity.0;
+    for mut field in &mut fields {
+        let field = &mut *field;
+        let tol = field.mass_tolerance;
+        for n in 0..field.mass.len() {
+            let m = field.mass[n];
+            if m > tol {
+                let f = field.force[n];
+                field.momentum[n] += dt * f;
+                field.acceleration[n] = f / m;
+                field.velocity[n] = field.momentum[n] / m;
+            } else if m > 0.0 {
+                field.force[n] = m * g;
+                field.momentum[n] += dt * m * g;
+                field.acceleration[n] = g;
+                field.velocity[n] = field.momentum[n] / m;
+            } else {
+                field.acceleration[n] = DVec2::ZERO;
+                field.velocity[n] = DVec2::ZERO;
+            }
+        }
+        apply_walls(&grid, &walls.0, field);
+    }
+}
+
+/// Which velocity components a wall removes: `(x, y)` masks.
+fn constrained(wall: Wall, normal_axis: usize) -> [bool; 2] {
+    match wall {
+        Wall::Free | Wall::Periodic => [false, false],
+        Wall::NoSlip => [true, true],
+        Wall::Slip => {
+            let mut c = [false, false];
+            c[normal_axis] = true;
+            c
+        }
+    }
+}
+
+fn constrain(field: &mut GridField, n: usize, mask: [bool; 2]) {
+    for (a, &fixed) in mask.iter().enumerate() {
+        if fixed {
+            field.force[n][a] = 0.0;
+            field.momentum[n][a] = 0.0;
+            field.velocity[n][a] = 0.0;
+            field.acceleration[n][a] = 0.0;
+        }
+    }
+}
+
+/// Applies the walls to the nodes on the domain's edges.
+pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField) {
+    let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
+    let sides = [
+        (walls.left, 0usize, true),
+        (walls.right, 0, false),
+        (walls.bottom, 1, true),
+        (walls.top, 1, false),
+    ];
+    for (wall, axis, low) in sides {
+        let mask = constrained(wall, axis);
+        if mask == [false, false] {
+            continue;
+        }
+        if axis == 0 {
+            let i = if low { 0 } else { nx - 1 };
+            for j in 0..ny {
+                constrain(field, grid.index(i, j), mask);
+            }
+        } else {
+            let j = if low { 0 } else { ny - 1 };
+            for i in 0..nx {
+                constrain(field, grid.index(i, j), mask);
+            }
+        }
+    }
+}

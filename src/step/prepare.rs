@@ -1,0 +1,71 @@
+//! The clock: choosing the time step, advancing time, deciding when outputs are due.
+
+use bevy_ecs::prelude::*;
+
+use crate::body::{Body, BodyState};
+use crate::grid::{GridField, GridGeometry};
+use crate::scene::TimeStep;
+use crate::sim::Clock;
+
+/// Fastest signal of the scene: each body's p-wave speed plus its fastest point.
+pub fn signal_speed<'a>(bodies: impl Iterator<Item = (&'a Body, &'a BodyState)>) -> f64 {
+    bodies
+        .map(|(b, s)| b.wave_speed + s.max_speed)
+        .fold(0.0, f64::max)
+}
+
+/// Sets `dt` (fixed, or `C h / (c + |v|max)`), clipping the last step onto the end time, and
+/// records the CFL number actually used.
+pub fn choose_time_step(
+    mut clock: ResMut<Clock>,
+    grid: Res<GridGeometry>,
+    bodies: Query<(&Body, &BodyState)>,
+) {
+    let h = grid.cell_size;
+    let signal = signal_speed(bodies.iter());
+    let remaining = clock.end - clock.time;
+    let mut dt = match clock.rule {
+        TimeStep::Fixed(dt) => dt,
+        TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
+        TimeStep::Cfl(_) => remaining,
+    };
+    clock.dt_min = clock.dt_min.min(dt);
+    clock.dt_max = clock.dt_max.max(dt);
+    clock.cfl_max = clock.cfl_max.max(dt * signal / h);
+    // A remainder within a millionth of a step is folded into this step rather than left
+    // as a sliver step of its own.
+    clock.last_step = dt >= remaining * (1.0 - 1e-6);
+    if clock.last_step {
+        dt = remaining;
+    }
+    clock.dt = dt;
+}
+
+/// Zeroes every body's nodal field before the scatter.
+pub fn clear_grids(mut fields: Query<&mut GridField>) {
+    for mut f in &mut fields {
+        f.clear();
+    }
+}
+
+/// Moves time forward by the step just taken.
+pub fn advance_clock(mut clock: ResMut<Clock>) {
+    clock.step += 1;
+    clock.time = if clock.last_step {
+        clock.end
+    } else {
+        clock.time + clock.dt
+    };
+}
+
+/// Flags an output at t = 0, at every `output_every`, and at the end.
+pub fn decide_output(mut clock: ResMut<Clock>) {
+    let eps = 1e-9 * clock.output_every;
+    let due = clock.observing || clock.last_step || clock.time >= clock.next_output - eps;
+    if due {
+        while clock.next_output <= clock.time + eps {
+            clock.next_output += clock.output_every;
+        }
+    }
+    clock.output_due = due;
+}

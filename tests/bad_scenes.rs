@@ -1,0 +1,229 @@
+//! A table of bad scenes, each rejected before the run with its expected message and line.
+
+use regolith::Regolith;
+use regolith::scene::Scene;
+
+/// A valid scene; each case replaces one line of it (lines are numbered from 1).
+const BASE: &str = r#"Scene(
+    name: "base",
+    domain: (size: (1.0, 1.0), cells: (10, 10)),
+    time: (end: 0.01, step: Fixed(1e-4), output_every: 1e-3),
+    gravity: (0.0, -9.81),
+    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),
+    bodies: [
+        (
+            name: "block",
+            shape: Rectangle(min: (0.2, 0.0), max: (0.8, 0.4)),
+            material: LinearElastic(density: 1000.0, youngs_modulus: 1e6, poisson_ratio: 0.3),
+        ),
+        (
+            name: "ball",
+            shape: Disc(centre: (0.5, 0.7), radius: 0.1),
+            material: LinearElastic(density: 2000.0, youngs_modulus: 1e7, poisson_ratio: 0.3),
+        ),
+    ],
+)"#;
+
+fn with_line(line: usize, text: &str) -> String {
+    BASE.lines()
+        .enumerate()
+        .map(|(i, l)| if i + 1 == line { text } else { l })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn the_base_scene_is_valid() {
+    Scene::parse(BASE, "base.ron", &Regolith::default().registries()).unwrap();
+}
+
+#[test]
+fn bad_scenes_give_their_messages() {
+    // (line to replace, replacement, expected message part, expected reported line)
+    let cases: &[(usize, &str, &str, Option<usize>)] = &[
+        (
+            2,
+            r#"    nmae: "base","#,
+            "Unexpected field named `nmae`",
+            Some(2),
+        ),
+        (4, "", "missing field named `time`", None),
+        (
+            3,
+            "    domain: (size: (1.0, 1.0), cells: (10.5, 10)),",
+            "Expected",
+            Some(3),
+        ),
+        (
+            3,
+            "    domain: (size: (-1.0, 1.0), cells: (10, 10)),",
+            "domain size must be two positive numbers",
+            Some(3),
+        ),
+        (
+            3,
+            "    domain: (size: (1.0, 1.0), cells: (10, 20)),",
+            "cells must be square",
+            Some(3),
+        ),
+        (
+            4,
+            "    time: (end: 0.01, step: Fixed(0.0), output_every: 1e-3),",
+            "fixed time step must be a positive",
+            Some(4),
+        ),
+        (
+            4,
+            "    time: (end: -1.0, step: Fixed(1e-4), output_every: 1e-3),",
+            "time.end must be a positive",
+            Some(4),
+        ),
+        (
+            4,
+            "    time: (end: 0.01, step: Cfl(1.5), output_every: 1e-3),",
+            "CFL number must lie in (0, 1]",
+            Some(4),
+        ),
+        (
+            6,
+            "    walls: (left: Periodic, right: Slip, bottom: NoSlip, top: Free),",
+            "periodic wall needs a periodic opposite",
+            Some(6),
+        ),
+        (
+            6,
+            "    walls: (left: Sticky, right: Slip, bottom: NoSlip, top: Free),",
+            "Sticky",
+            Some(6),
+        ),
+        (
+            11,
+            "            material: LinearElastic(density: 1000.0, youngs_modulus: 1e6, poisson_ratio: 0.5),",
+            "poisson_ratio must lie strictly between -1 and 0.5",
+            Some(11),
+        ),
+        (
+            11,
+            "            material: LinearElastic(density: 0.0, youngs_modulus: 1e6, poisson_ratio: 0.3),",
+            "density must be a positive",
+            Some(11),
+        ),
+        (
+            11,
+            "            material: Granite(density: 1.0),",
+            "unknown material `Granite`, expected one of: LinearElastic",
+            Some(11),
+        ),
+        (
+            11,
+            "            material: LinearElastic(density: 1000.0, youngs_modulus: 1e6),",
+            "missing field named `poisson_ratio`",
+            Some(11),
+        ),
+        (
+            10,
+            "            shape: Rectangle(min: (0.2, 0.0), max: (0.1, 0.4)),",
+            "width (max.x - min.x) must be a positive",
+            Some(10),
+        ),
+        (
+            10,
+            "            shape: Rectangle(min: (0.2, 0.0), max: (1.8, 0.4)),",
+            "outside the domain",
+            Some(9),
+        ),
+        (
+            10,
+            "            shape: Rectangle(min: (0.2, 0.0), max: (0.8, 0.7)),",
+            "overlap",
+            Some(9),
+        ),
+        (
+            10,
+            "            shape: Disc(centre: (0.5, 0.2), radius: 0.001),",
+            "holds no material point",
+            Some(9),
+        ),
+        (
+            10,
+            "            shape: Hexagon(size: 1.0),",
+            "unknown shape `Hexagon`",
+            Some(10),
+        ),
+        (
+            14,
+            r#"            name: "block","#,
+            "another body has the same name",
+            None,
+        ),
+        (12, "        ),,", "", Some(12)),
+    ];
+    let registries = Regolith::default().registries();
+    let mut wrong = Vec::new();
+    for (line, replacement, expected, at) in cases {
+        let text = with_line(*line, replacement);
+        let Err(err) = Scene::parse(&text, "bad.ron", &registries) else {
+            wrong.push(format!("line {line} -> {replacement:?} was accepted"));
+            continue;
+        };
+        if err.file != "bad.ron"
+            || !err.message.contains(expected)
+            || at.is_some_and(|a| err.line != Some(a))
+        {
+            wrong.push(format!(
+                "line {line} -> {replacement:?}: got `{err}`, wanted {expected:?} at line {at:?}"
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+#[test]
+fn a_scene_without_bodies_is_rejected() {
+    let head: Vec<&str> = BASE.lines().take(6).collect();
+    let text = format!("{}\n    bodies: [],\n)", head.join("\n"));
+    let err = Scene::parse(&text, "bad.ron", &Regolith::default().registries()).unwrap_err();
+    assert!(err.message.contains("at least one body"), "{err}");
+    assert_eq!(err.line, Some(7));
+}
+
+#[test]
+fn lithostatic_stress_needs_vertical_gravity() {
+    let text = BASE
+        .replace("gravity: (0.0, -9.81)", "gravity: (2.0, -9.81)")
+        .replace(
+            "max: (0.8, 0.4)),",
+            "max: (0.8, 0.4)), initial_stress: Lithostatic,",
+        );
+    let err = Scene::parse(&text, "bad.ron", &Regolith::default().registries()).unwrap_err();
+    assert!(err.message.contains("gravity along -y"), "{err}");
+}
+
+#[test]
+fn overrides_are_checked_like_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("base.ron");
+    std::fs::write(&path, BASE).unwrap();
+    let reg = Regolith::default().registries();
+    let set = |s: &str| Scene::load(&path, &[s.to_string()], &reg);
+    assert!(
+        set("bodies.ball.material.poisson_ratio=0.7")
+            .unwrap_err()
+            .message
+            .contains("poisson_ratio")
+    );
+    assert!(
+        set("bodies.comet.velocity=(0, 1)")
+            .unwrap_err()
+            .message
+            .contains("no item named")
+    );
+    assert!(
+        set("time.step")
+            .unwrap_err()
+            .message
+            .contains("key.path=value")
+    );
+    let (scene, _) = set("bodies.ball.velocity=(0.0, -3.5)").unwrap();
+    assert_eq!(scene.bodies[1].velocity.y, -3.5);
+}

@@ -1,0 +1,149 @@
+//! The `regolith` command as a user scripts it: outputs, exit codes, one-line errors.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::scene_path;
+
+fn regolith(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_regolith"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn run_writes_summary_and_trajectory() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("column");
+    let scene = scene_path("elastic_column_gravity");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "time.end=0.05",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = read_json(&out.join("summary.json"));
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["scene"], "elastic_column_gravity");
+    assert_eq!(s["time"], 0.05);
+    for key in [
+        "steps",
+        "dt",
+        "cfl",
+        "particles",
+        "wall_s",
+        "particle_steps_per_s",
+    ] {
+        assert!(s[key].as_f64().unwrap() > 0.0, "{key} = {}", s[key]);
+    }
+    assert!(s["cfl"].as_f64().unwrap() <= 0.5 + 1e-12);
+    let body = &s["bodies"][0];
+    assert_eq!(body["name"], "column");
+    assert!(body["kinetic_energy"].as_f64().unwrap() > 0.0);
+    assert_eq!(body["centre_of_mass"].as_array().unwrap().len(), 2);
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,column_x,column_y,column_vx,column_vy"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    // t = 0, every 5 ms up to 50 ms: 11 rows.
+    assert_eq!(rows.len(), 11, "{csv}");
+    assert_eq!(rows[0][0], 0.0);
+    assert_eq!(rows[10][0], 0.05);
+    assert!(!out.join("trajectory.csv.part").exists());
+    assert!(out.join("scene.ron").exists());
+    assert!(out.join("snapshots/snapshot_00000.csv").exists());
+}
+
+#[test]
+fn a_failing_run_keeps_its_outputs_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("escape");
+    let scene = scene_path("elastic_column_gravity");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "bodies.column.velocity=(0.0, 20.0)",
+        "--quiet",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("left the domain through the top"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    let s = read_json(&out.join("summary.json"));
+    assert_eq!(s["status"], "failed");
+    assert!(s["failure"].as_str().unwrap().contains("column"));
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    assert!(
+        csv.lines().count() >= 2,
+        "the rows before the fault are kept"
+    );
+}
+
+#[test]
+fn check_prints_the_resolved_setup() {
+    let scene = scene_path("elastic_bar_vibration");
+    let o = regolith(&["check", scene.to_str().unwrap()]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    for part in [
+        "60 x 4 cells",
+        "800 points",
+        "first dt",
+        "memory",
+        "p-wave speed 116.0",
+    ] {
+        assert!(text.contains(part), "missing {part:?} in\n{text}");
+    }
+}
+
+#[test]
+fn user_errors_are_one_line_without_panic() {
+    let scene = scene_path("elastic_bar_vibration");
+    let scene = scene.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["run", "no/such/scene.ron"], "cannot read the scene"),
+        (
+            &["check", scene, "--set", "time.end=-1"],
+            "time.end must be a positive",
+        ),
+        (
+            &["check", scene, "--set", "bodies.bar.nope.x=1"],
+            "no field `nope`",
+        ),
+        (&["check", scene, "--set", "garbage"], "key.path=value"),
+        (
+            &["check", scene, "--set", "integration=Quadratic"],
+            "Quadratic",
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = regolith(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(expected),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(!err.contains("panicked"));
+    }
+}
