@@ -168,8 +168,8 @@ mod tests {
         let poly = Polygon {
             vertices: vec![
                 DVec2::new(0.0, 0.0),
-                DVec2::new(1.0, 1.0),
-                DVec2::new(1.0, 0.0),
+                DVec2::new(2.0, 2.0),
+                DVec2::new(2.0, 0.0),
                 DVec2::new(0.0, 1.0),
             ],
         };
