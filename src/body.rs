@@ -26,6 +26,9 @@ pub struct Points {
     /// Grid velocity interpolated at the point in the last step (its advection velocity);
     /// MUSL carries it from the velocity pass to the position update.
     pub advection: Vec<DVec2>,
+    /// The density the constitutive update sees (kg/m^3): `m/V`, or with cell-averaged
+    /// dilatation the mean density of the points in the point's cell.
+    pub density: Vec<f64>,
 }
 
 impl Points {
@@ -38,7 +41,50 @@ impl Points {
     }
 
     /// Bytes held per point (for memory estimates), not counting material history.
-    pub const BYTES_PER_POINT: usize = 16 + 16 + 8 + 8 + 8 + 32 + 32 + 16;
+    pub const BYTES_PER_POINT: usize = 16 + 16 + 8 + 8 + 8 + 32 + 32 + 16 + 8;
+}
+
+/// The state of the material at a point, as the constitutive update classifies it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Phase {
+    /// Dense and below the yield surface (elastic).
+    #[default]
+    Solid,
+    /// Dense and flowing plastically (on the yield surface).
+    Flowing,
+    /// Below the critical density or in tension: stress free (granular "gas").
+    Disconnected,
+}
+
+impl Phase {
+    /// 0 solid, 1 flowing, 2 disconnected (for CSV and colour maps).
+    pub fn code(self) -> u8 {
+        match self {
+            Phase::Solid => 0,
+            Phase::Flowing => 1,
+            Phase::Disconnected => 2,
+        }
+    }
+}
+
+/// Public per-point results of the constitutive update, for diagnostics and outputs.
+#[derive(Component, Clone, Debug, Default)]
+pub struct PointStates {
+    /// Equivalent plastic shear strain rate of the last step (1/s).
+    pub plastic_strain_rate: Vec<f64>,
+    /// Accumulated equivalent plastic shear strain.
+    pub plastic_strain: Vec<f64>,
+    pub phase: Vec<Phase>,
+}
+
+impl PointStates {
+    pub fn new(points: usize) -> Self {
+        PointStates {
+            plastic_strain_rate: vec![0.0; points],
+            plastic_strain: vec![0.0; points],
+            phase: vec![Phase::Solid; points],
+        }
+    }
 }
 
 /// What a body is: its name and the facts the step needs about it.
@@ -53,6 +99,20 @@ pub struct Body {
     pub material: &'static str,
     /// Elastic p-wave speed used by the CFL condition (m/s).
     pub wave_speed: f64,
+    /// `d sqrt(rho_s)` of a granular material, so that the inertial number is
+    /// `I = gdp d sqrt(rho_s / p)`; `None` for materials without grains.
+    pub inertial_scale: Option<f64>,
+}
+
+impl Body {
+    /// Inertial number of a point with plastic rate `gdp` at pressure `p` (0 when `p <= 0`
+    /// or the material has no grain scale).
+    pub fn inertial_number(&self, gdp: f64, p: f64) -> f64 {
+        match self.inertial_scale {
+            Some(s) if p > 0.0 => gdp * s / p.sqrt(),
+            _ => 0.0,
+        }
+    }
 }
 
 /// Whole-body quantities, refreshed in the Diagnostics set.

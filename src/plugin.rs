@@ -11,6 +11,7 @@ use std::rc::Rc;
 use crate::error::SceneError;
 use crate::material::MaterialPlugin;
 use crate::material::elastic::LinearElastic;
+use crate::material::granular::{DruckerPrager, MuI};
 use crate::output::OutputPlugin;
 use crate::output::snapshots::Snapshots;
 use crate::registry::Registries;
@@ -29,6 +30,8 @@ pub struct DefaultPlugins;
 impl Plugin for DefaultPlugins {
     fn build(&self, r: &mut Registries) {
         MaterialPlugin::<LinearElastic>::default().build(r);
+        MaterialPlugin::<MuI>::default().build(r);
+        MaterialPlugin::<DruckerPrager>::default().build(r);
         ShapePlugin::<Rectangle>::default().build(r);
         ShapePlugin::<Disc>::default().build(r);
         ShapePlugin::<Polygon>::default().build(r);

@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 
-use crate::body::{Body, BodyState, Points};
+use crate::body::{Body, BodyState, PointStates, Points};
 use crate::contact::{self, Contact};
 use crate::diagnostics::Health;
 use crate::error::Fault;
@@ -13,7 +13,8 @@ use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::output::RunDir;
 use crate::output::trajectory::Trajectory;
-use crate::scene::{BodySpec, InitialStress, Scene, TimeStep, Walls};
+use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Walls};
+use crate::step::CellDilatation;
 use crate::step::{self, StepSet, Timings};
 use crate::stress::Stress;
 
@@ -79,7 +80,9 @@ fn initial_stresses(
                 *t = f64::max(*t, p.y + 0.5 * spacing);
             }
             let rho = spec.material.density();
-            let k0 = spec.material.lithostatic_ratio();
+            let k0 = spec
+                .lateral_stress_ratio
+                .unwrap_or_else(|| spec.material.lithostatic_ratio());
             positions
                 .iter()
                 .map(|p| {
@@ -111,7 +114,11 @@ impl Simulation {
     fn build(scene: &Scene, dir: Option<&std::path::Path>) -> std::io::Result<Simulation> {
         let grid = scene.grid();
         let mut world = World::new();
-        let mut schedule = step::build_schedule(scene.integration, scene.update);
+        let mut schedule = step::build_schedule(step::StepOptions {
+            integration: scene.integration,
+            update: scene.update,
+            dilatation: scene.dilatation,
+        });
         let multi_body = scene.bodies.len() > 1;
         let mut materials = BTreeSet::new();
         let mut tracked = Vec::new();
@@ -121,10 +128,11 @@ impl Simulation {
             let density = spec.material.density();
             let mass = density * lattice.spacing * lattice.spacing;
             let stress = initial_stresses(spec, &lattice.positions, lattice.spacing, scene.gravity);
-            let volume = stress
+            let volume: Vec<f64> = stress
                 .iter()
                 .map(|s| spec.material.initial_volume(mass, s))
                 .collect();
+            let point_density = volume.iter().map(|v| mass / v).collect();
             let points = Points {
                 position: lattice.positions,
                 velocity: vec![spec.velocity; n],
@@ -134,6 +142,7 @@ impl Simulation {
                 stress,
                 velocity_gradient: vec![DMat2::ZERO; n],
                 advection: vec![spec.velocity; n],
+                density: point_density,
             };
             let body = Body {
                 name: spec.name.clone(),
@@ -141,6 +150,7 @@ impl Simulation {
                 tracked: spec.tracked,
                 material: spec.material.name(),
                 wave_speed: spec.material.wave_speed(),
+                inertial_scale: spec.material.inertial_scale(),
             };
             if spec.tracked {
                 tracked.push(spec.name.clone());
@@ -150,8 +160,17 @@ impl Simulation {
                 mass_tolerance(density, grid.cell_size),
                 false,
             );
-            let mut entity = world.spawn((body, points, field, BodyState::default()));
+            let mut entity = world.spawn((
+                body,
+                points,
+                PointStates::new(n),
+                field,
+                BodyState::default(),
+            ));
             spec.material.attach(&mut entity, n);
+            if scene.dilatation == Dilatation::CellAveraged {
+                entity.insert(CellDilatation::new(grid.cells[0] * grid.cells[1]));
+            }
             if materials.insert(spec.material.name()) {
                 spec.material.add_systems(&mut schedule);
             }

@@ -111,7 +111,7 @@ fn bad_scenes_give_their_messages() {
         (
             11,
             "            material: Granite(density: 1.0),",
-            "unknown material `Granite`, expected one of: LinearElastic",
+            "unknown material `Granite`, expected one of: DruckerPrager, LinearElastic, MuI",
             Some(11),
         ),
         (

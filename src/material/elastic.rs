@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use super::{Material, PointStep};
+use super::{Material, PointOutcome, PointStep};
 use crate::stress::Stress;
 
 /// `LinearElastic(density: .., youngs_modulus: .., poisson_ratio: ..)` in a scene.
@@ -70,9 +70,10 @@ impl Material for LinearElastic {
         self.poisson_ratio / (1.0 - self.poisson_ratio)
     }
 
-    fn update(&self, stress: &mut Stress, _history: &mut (), step: &PointStep) {
+    fn update(&self, stress: &mut Stress, _history: &mut (), step: &PointStep) -> PointOutcome {
         let (shear, bulk) = moduli(self.youngs_modulus, self.poisson_ratio);
         *stress = stress.jaumann_elastic_trial(step.velocity_gradient, step.dt, shear, bulk);
+        PointOutcome::default()
     }
 }
 

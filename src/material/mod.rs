@@ -6,6 +6,7 @@
 //! only if some body uses it. Built-in materials register exactly this way.
 
 pub mod elastic;
+pub mod granular;
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
@@ -16,7 +17,7 @@ use glam::DMat2;
 use rayon::prelude::*;
 use serde::de::DeserializeOwned;
 
-use crate::body::Points;
+use crate::body::{Phase, PointStates, Points};
 use crate::plugin::Plugin;
 use crate::registry::{IntoSpec, Registries, construct};
 use crate::sim::Clock;
@@ -29,7 +30,8 @@ pub struct PointStep {
     /// Velocity gradient of this step.
     pub velocity_gradient: DMat2,
     pub dt: f64,
-    /// Current mass density `m/V` with the volume already updated this step.
+    /// Current mass density with the volume already updated this step: the point's `m/V`,
+    /// or the mean over its cell with cell-averaged dilatation.
     pub density: f64,
 }
 
@@ -53,8 +55,26 @@ pub trait Material: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     fn initial_volume(&self, mass: f64, _stress: &Stress) -> f64 {
         mass / self.density()
     }
-    /// Advances one point's stress and history over one step.
-    fn update(&self, stress: &mut Stress, history: &mut Self::History, step: &PointStep);
+    /// `d sqrt(rho_s)` for granular materials (see [`crate::body::Body::inertial_number`]).
+    fn inertial_scale(&self) -> Option<f64> {
+        None
+    }
+    /// Advances one point's stress and history over one step; returns the point's plastic
+    /// shear strain rate and phase.
+    fn update(
+        &self,
+        stress: &mut Stress,
+        history: &mut Self::History,
+        step: &PointStep,
+    ) -> PointOutcome;
+}
+
+/// What one constitutive update reports about its point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointOutcome {
+    /// Equivalent plastic shear strain rate (1/s), `>= 0`.
+    pub plastic_strain_rate: f64,
+    pub phase: Phase,
 }
 
 /// A material as the scene and the simulation builder see it (object safe).
@@ -66,6 +86,7 @@ pub trait MaterialSpec: Debug + Send + Sync {
     fn wave_speed(&self) -> f64;
     fn lithostatic_ratio(&self) -> f64;
     fn initial_volume(&self, mass: f64, stress: &Stress) -> f64;
+    fn inertial_scale(&self) -> Option<f64>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
     /// Adds this material's update system (called once per material type in a scene).
@@ -97,6 +118,9 @@ impl<M: Material> MaterialSpec for M {
     }
     fn initial_volume(&self, mass: f64, stress: &Stress) -> f64 {
         Material::initial_volume(self, mass, stress)
+    }
+    fn inertial_scale(&self) -> Option<f64> {
+        Material::inertial_scale(self)
     }
     fn attach(&self, entity: &mut EntityWorldMut, points: usize) {
         entity.insert(MaterialState::<M> {
@@ -151,11 +175,12 @@ impl<M: Material> Plugin for MaterialPlugin<M> {
 /// The constitutive update of every body made of `M` (SCIENCE.md 2, step 7).
 fn update_stress<M: Material>(
     clock: Res<Clock>,
-    mut bodies: Query<(&mut Points, &mut MaterialState<M>)>,
+    mut bodies: Query<(&mut Points, &mut PointStates, &mut MaterialState<M>)>,
 ) {
     let dt = clock.dt;
-    for (mut points, mut state) in &mut bodies {
+    for (mut points, mut states, mut state) in &mut bodies {
         let points = &mut *points;
+        let states = &mut *states;
         let state = &mut *state;
         let params = &state.params;
         points
@@ -163,14 +188,26 @@ fn update_stress<M: Material>(
             .par_iter_mut()
             .zip(state.history.par_iter_mut())
             .zip(points.velocity_gradient.par_iter())
-            .zip(points.mass.par_iter().zip(points.volume.par_iter()))
-            .for_each(|(((stress, history), &l), (&m, &v))| {
-                let step = PointStep {
-                    velocity_gradient: l,
-                    dt,
-                    density: m / v,
-                };
-                params.update(stress, history, &step);
-            });
+            .zip(points.density.par_iter())
+            .zip(
+                states
+                    .plastic_strain_rate
+                    .par_iter_mut()
+                    .zip(states.plastic_strain.par_iter_mut())
+                    .zip(states.phase.par_iter_mut()),
+            )
+            .for_each(
+                |((((stress, history), &l), &density), ((rate, strain), phase))| {
+                    let step = PointStep {
+                        velocity_gradient: l,
+                        dt,
+                        density,
+                    };
+                    let outcome = params.update(stress, history, &step);
+                    *rate = outcome.plastic_strain_rate;
+                    *strain += outcome.plastic_strain_rate * dt;
+                    *phase = outcome.phase;
+                },
+            );
     }
 }

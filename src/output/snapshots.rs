@@ -1,7 +1,8 @@
 //! `Snapshots(every: 0.01)`: every material point's state as CSV at a fixed interval.
 //!
 //! Files go to `<out>/snapshots/snapshot_NNNNN.csv` with columns
-//! `t,body,x,y,vx,vy,mass,volume,pressure,shear_stress`; they feed figures and external
+//! `t,body,x,y,vx,vy,mass,volume,pressure,shear_stress,plastic_strain_rate,plastic_strain,phase`
+//! (phase: 0 solid, 1 flowing, 2 disconnected); they feed figures and external
 //! analysis. The built-in output registers through [`super::OutputPlugin`] like a user's.
 
 use std::fmt::Write as _;
@@ -10,7 +11,7 @@ use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
 use super::{Output, RunDir, write_atomic};
-use crate::body::{Body, Points};
+use crate::body::{Body, PointStates, Points};
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -57,7 +58,7 @@ fn write_snapshot(
     dir: Res<RunDir>,
     mut snap: ResMut<SnapshotClock>,
     mut health: ResMut<crate::diagnostics::Health>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<(&Body, &Points, &PointStates)>,
 ) {
     let eps = 1e-9 * snap.every;
     if !(clock.observing || clock.last_step || clock.time >= snap.next - eps) {
@@ -68,14 +69,16 @@ fn write_snapshot(
     }
     let Some(dir) = &dir.0 else { return };
     let mut sorted: Vec<_> = bodies.iter().collect();
-    sorted.sort_by_key(|(b, _)| b.index);
-    let mut csv = String::from("t,body,x,y,vx,vy,mass,volume,pressure,shear_stress\n");
-    for (body, p) in sorted {
+    sorted.sort_by_key(|(b, _, _)| b.index);
+    let mut csv = String::from(
+        "t,body,x,y,vx,vy,mass,volume,pressure,shear_stress,plastic_strain_rate,plastic_strain,phase\n",
+    );
+    for (body, p, st) in sorted {
         for k in 0..p.len() {
             let (x, v, s) = (p.position[k], p.velocity[k], p.stress[k]);
             let _ = writeln!(
                 csv,
-                "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
                 clock.time,
                 body.name,
                 x.x,
@@ -85,7 +88,10 @@ fn write_snapshot(
                 p.mass[k],
                 p.volume[k],
                 s.pressure(),
-                s.equivalent_shear()
+                s.equivalent_shear(),
+                st.plastic_strain_rate[k],
+                st.plastic_strain[k],
+                st.phase[k].code()
             );
         }
     }

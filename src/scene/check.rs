@@ -188,6 +188,18 @@ impl Scene {
                         .to_string(),
                 );
             }
+            if let Some(k) = b.lateral_stress_ratio {
+                if !(k.is_finite() && k >= 0.0) {
+                    return err(format!(
+                        "lateral_stress_ratio must be a non-negative number, got {k}"
+                    ));
+                }
+                if b.initial_stress != InitialStress::Lithostatic {
+                    return err(
+                        "lateral_stress_ratio needs initial_stress: Lithostatic".to_string()
+                    );
+                }
+            }
             let (lo, hi) = b.shape.bounds();
             let tol = 1e-9 * grid.cell_size;
             if lo.x < dmin.x - tol

@@ -43,6 +43,9 @@ pub struct Scene {
     /// Where the velocity gradient comes from: `Usl` (the paper) or `Musl`; default `Usl`.
     #[serde(default)]
     pub update: StressUpdate,
+    /// How the dilatation `tr L` is taken: `CellAveraged` (default) or `PerPoint`.
+    #[serde(default)]
+    pub dilatation: Dilatation,
     /// How bodies interact where they share grid nodes; default `NoSlip`.
     #[serde(default)]
     pub contact: Contact,
@@ -74,6 +77,17 @@ pub enum StressUpdate {
     /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
     /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
     Musl,
+}
+
+/// How the volumetric part of the velocity gradient is taken (docs/numerics.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Dilatation {
+    /// Each point's own `tr L` (the paper's formulation).
+    PerPoint,
+    /// The volume-weighted mean `tr L` of the points in the point's cell; removes the
+    /// checkerboard pressure mode of several points per cell.
+    #[default]
+    CellAveraged,
 }
 
 /// The rectangular domain and its grid of square cells.
@@ -149,6 +163,11 @@ pub struct BodySpec {
     /// Initial stress; default `None`.
     #[serde(default)]
     pub initial_stress: InitialStress,
+    /// With `Lithostatic`: `T_xx = T_zz = k T_yy` with this `k` instead of the material's
+    /// own ratio (1 for the granular materials, `nu / (1 - nu)` for `LinearElastic`). A
+    /// free-standing column is in equilibrium with `k = 0`.
+    #[serde(default)]
+    pub lateral_stress_ratio: Option<f64>,
     /// Whether the body's centre of mass goes into `trajectory.csv`; default false.
     #[serde(default)]
     pub tracked: bool,
@@ -176,7 +195,10 @@ impl Scene {
         origin: &str,
         registries: &Rc<Registries>,
     ) -> Result<Scene, SceneError> {
-        let scene: Scene = with_registries(registries, || ron::from_str(text)).map_err(|e| {
+        // Optional parameters are written bare (`critical_density: 1011.2`), not `Some(..)`.
+        let options = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let scene: Scene = with_registries(registries, || options.from_str(text)).map_err(|e| {
             SceneError::at(
                 origin,
                 e.span.start.line,

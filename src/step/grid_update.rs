@@ -46,7 +46,7 @@ pub fn update_grid(
                 field.velocity[n] = DVec2::ZERO;
             }
         }
-        apply_walls(&grid, &walls.0, field);
+        apply_walls(&grid, &walls.0, field, Some(dt));
     }
 }
 
@@ -63,19 +63,32 @@ fn constrained(wall: Wall, normal_axis: usize) -> [bool; 2] {
     }
 }
 
-fn constrain(field: &mut GridField, n: usize, mask: [bool; 2]) {
+/// Zeroes the constrained components of node `n`. With `dt` (after the momentum update) the
+/// acceleration becomes the change the wall imposes over the step, `-v^n / dt`, so that the
+/// FLIP update of nearby points sees the wall stop them; without it (a velocity remap) only
+/// velocities are touched.
+fn constrain(field: &mut GridField, n: usize, mask: [bool; 2], dt: Option<f64>) {
     for (a, &fixed) in mask.iter().enumerate() {
-        if fixed {
-            field.force[n][a] = 0.0;
+        if !fixed {
+            continue;
+        }
+        field.velocity[n][a] = 0.0;
+        if let Some(dt) = dt {
+            let m = field.mass[n];
+            let start = if m > 0.0 {
+                (field.momentum[n][a] - dt * field.force[n][a]) / m
+            } else {
+                0.0
+            };
+            field.force[n][a] = -m * start / dt;
             field.momentum[n][a] = 0.0;
-            field.velocity[n][a] = 0.0;
-            field.acceleration[n][a] = 0.0;
+            field.acceleration[n][a] = -start / dt;
         }
     }
 }
 
-/// Applies the walls to the nodes on the domain's edges.
-pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField) {
+/// Applies the walls to the nodes on the domain's edges; `dt` as in [`constrain`].
+pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt: Option<f64>) {
     let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
     let sides = [
         (walls.left, 0usize, true),
@@ -91,12 +104,12 @@ pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField) {
         if axis == 0 {
             let i = if low { 0 } else { nx - 1 };
             for j in 0..ny {
-                constrain(field, grid.index(i, j), mask);
+                constrain(field, grid.index(i, j), mask, dt);
             }
         } else {
             let j = if low { 0 } else { ny - 1 };
             for i in 0..nx {
-                constrain(field, grid.index(i, j), mask);
+                constrain(field, grid.index(i, j), mask, dt);
             }
         }
     }

@@ -19,11 +19,12 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel};
 
 use crate::integration::{CpdiFixed, Integration, Linear, Scheme};
-use crate::scene::StressUpdate;
+use crate::scene::{Dilatation, StressUpdate};
 use crate::sim::Clock;
 
 pub use grid_update::apply_walls;
 pub use prepare::signal_speed;
+pub use transfer::CellDilatation;
 
 /// The stages of a step, run in this order.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -122,9 +123,16 @@ pub fn output_due(clock: Res<Clock>) -> bool {
     clock.output_due
 }
 
-/// The schedule of one step with the core systems for the given integration scheme and
-/// update variant.
-pub fn build_schedule(integration: Integration, update: StressUpdate) -> Schedule {
+/// The numerical options that decide which core systems a step has.
+#[derive(Clone, Copy, Debug)]
+pub struct StepOptions {
+    pub integration: Integration,
+    pub update: StressUpdate,
+    pub dilatation: Dilatation,
+}
+
+/// The schedule of one step with the core systems for the given options.
+pub fn build_schedule(options: StepOptions) -> Schedule {
     let mut schedule = Schedule::new(StepSchedule);
     schedule.set_build_settings(ScheduleBuildSettings {
         ambiguity_detection: LogLevel::Error,
@@ -145,9 +153,32 @@ pub fn build_schedule(integration: Integration, update: StressUpdate) -> Schedul
             .chain()
             .in_set(StepSet::Prepare),
     );
-    match integration {
-        Integration::Linear => add_transfers::<Linear>(&mut schedule, update),
-        Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, update),
+    match options.integration {
+        Integration::Linear => add_transfers::<Linear>(&mut schedule, options.update),
+        Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, options.update),
+    }
+    let gradient_done = StepSet::GridToParticle;
+    match options.dilatation {
+        Dilatation::PerPoint => {
+            schedule.add_systems(
+                (transfer::advect_points, transfer::point_density)
+                    .chain()
+                    .in_set(gradient_done)
+                    .after(GradientSystems),
+            );
+        }
+        Dilatation::CellAveraged => {
+            schedule.add_systems(
+                (
+                    transfer::average_dilatation,
+                    transfer::advect_points,
+                    transfer::cell_density,
+                )
+                    .chain()
+                    .in_set(gradient_done)
+                    .after(GradientSystems),
+            );
+        }
     }
     schedule.add_systems(grid_update::update_grid.in_set(StepSet::GridUpdate));
     schedule.add_systems(
@@ -168,11 +199,19 @@ pub fn build_schedule(integration: Integration, update: StressUpdate) -> Schedul
     schedule
 }
 
+/// The gather systems that produce point velocities and velocity gradients.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct GradientSystems;
+
 fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
     schedule.add_systems(transfer::particle_to_grid::<S>.in_set(StepSet::ParticleToGrid));
     match update {
         StressUpdate::Usl => {
-            schedule.add_systems(transfer::grid_to_particle::<S>.in_set(StepSet::GridToParticle));
+            schedule.add_systems(
+                transfer::grid_to_particle::<S>
+                    .in_set(StepSet::GridToParticle)
+                    .in_set(GradientSystems),
+            );
         }
         StressUpdate::Musl => {
             schedule.add_systems(
@@ -182,7 +221,8 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
                     transfer::musl_gradient::<S>,
                 )
                     .chain()
-                    .in_set(StepSet::GridToParticle),
+                    .in_set(StepSet::GridToParticle)
+                    .in_set(GradientSystems),
             );
         }
     }

@@ -8,7 +8,8 @@
 //! the velocity pass updates `v_p` and keeps the advection velocity, the remap scatters the
 //! new `m_p v_p` back to the grid, and the gradient pass takes `L` from those remapped nodal
 //! velocities, which are weighted averages of point velocities and so stay bounded at nodes
-//! of tiny mass.
+//! of tiny mass. Either way the points move (and their volumes change) in a last pass,
+//! after the optional cell averaging of the dilatation (`dilatation`).
 
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
@@ -18,6 +19,7 @@ use super::grid_update::apply_walls;
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
 use crate::integration::{Scheme, Stencil};
+use crate::scene::Wall;
 use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the
@@ -78,15 +80,8 @@ fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, flip: f64) -> D
     flip * (v + dt * a_grid) + (1.0 - flip) * v_grid
 }
 
-/// Moves a point by its advection velocity and updates its volume from `tr L`.
-#[inline]
-fn advance(grid: &GridGeometry, x: &mut DVec2, vol: &mut f64, v_grid: DVec2, l: DMat2, dt: f64) {
-    *x = grid.wrap(*x + dt * v_grid);
-    *vol *= (dt * (l.x_axis.x + l.y_axis.y)).exp();
-}
-
-/// USL: FLIP velocity update, advection with the new grid velocity, velocity gradient
-/// `L = sum v_i (outer) grad S`, and volume `V *= exp(dt tr L)`, in one pass.
+/// USL: FLIP velocity update, advection velocity and velocity gradient
+/// `L = sum v_i (outer) grad S`, in one pass.
 pub fn grid_to_particle<S: Scheme>(
     grid: Res<GridGeometry>,
     clock: Res<Clock>,
@@ -98,23 +93,17 @@ pub fn grid_to_particle<S: Scheme>(
         let points = &mut *points;
         points
             .position
-            .par_iter_mut()
+            .par_iter()
+            .zip(points.half_width.par_iter())
             .zip(points.velocity.par_iter_mut())
+            .zip(points.advection.par_iter_mut())
             .zip(points.velocity_gradient.par_iter_mut())
-            .zip(points.volume.par_iter_mut())
-            .zip(
-                points
-                    .half_width
-                    .par_iter()
-                    .zip(points.advection.par_iter_mut()),
-            )
-            .for_each(|((((x, v), l), vol), (&a, adv))| {
+            .for_each(|((((x, &a), v), adv), l)| {
                 let stencil = Stencil::new::<S>(grid, *x, a);
                 let (v_grid, a_grid) = interpolate(&stencil, field);
                 *v = new_velocity(*v, v_grid, a_grid, dt, flip);
                 *adv = v_grid;
                 *l = velocity_gradient(&stencil, &field.velocity);
-                advance(grid, x, vol, v_grid, *l, dt);
             });
     }
 }
@@ -168,34 +157,187 @@ pub fn musl_remap<S: Scheme>(
                 DVec2::ZERO
             };
         }
-        apply_walls(&grid, &walls.0, field);
+        apply_walls(&grid, &walls.0, field, None);
     }
 }
 
-/// MUSL pass 3: `L` from the remapped velocities, then position and volume.
+/// MUSL pass 3: `L` from the remapped velocities.
 pub fn musl_gradient<S: Scheme>(
     grid: Res<GridGeometry>,
-    clock: Res<Clock>,
     mut bodies: Query<(&mut Points, &GridField)>,
 ) {
-    let (dt, grid) = (clock.dt, &*grid);
+    let grid = &*grid;
     for (mut points, field) in &mut bodies {
         let points = &mut *points;
         points
             .position
-            .par_iter_mut()
+            .par_iter()
+            .zip(points.half_width.par_iter())
             .zip(points.velocity_gradient.par_iter_mut())
+            .for_each(|((x, &a), l)| {
+                let stencil = Stencil::new::<S>(grid, *x, a);
+                *l = velocity_gradient(&stencil, &field.velocity);
+            });
+    }
+}
+
+/// Per-cell sums for the cell-averaged dilatation and density.
+#[derive(Component, Clone, Debug, Default)]
+pub struct CellDilatation {
+    volume: Vec<f64>,
+    weighted: Vec<f64>,
+}
+
+impl CellDilatation {
+    pub fn new(cells: usize) -> Self {
+        CellDilatation {
+            volume: vec![0.0; cells],
+            weighted: vec![0.0; cells],
+        }
+    }
+}
+
+/// The cell a point lies in (clamped into the grid).
+#[inline]
+fn cell_of(grid: &GridGeometry, x: DVec2) -> usize {
+    let rel = (x - grid.origin) / grid.cell_size;
+    let i = (rel.x.floor().max(0.0) as usize).min(grid.cells[0] - 1);
+    let j = (rel.y.floor().max(0.0) as usize).min(grid.cells[1] - 1);
+    j * grid.cells[0] + i
+}
+
+/// Replaces each point's dilatation `tr L` by the volume-weighted mean over the points in
+/// its cell, keeping the deviatoric part: `L += (mean - tr L)/2 * 1`. With several points
+/// per cell and bilinear nodes, per-point dilatations carry a checkerboard pressure mode
+/// (docs/numerics.md); the cell mean removes it, as selective reduced integration does for
+/// finite elements.
+pub fn average_dilatation(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation)>,
+) {
+    let grid = &*grid;
+    for (mut points, mut cells) in &mut bodies {
+        let points = &mut *points;
+        let cells = &mut *cells;
+        cells.volume.fill(0.0);
+        cells.weighted.fill(0.0);
+        for k in 0..points.len() {
+            let c = cell_of(grid, points.position[k]);
+            let l = points.velocity_gradient[k];
+            cells.volume[c] += points.volume[k];
+            cells.weighted[c] += points.volume[k] * (l.x_axis.x + l.y_axis.y);
+        }
+        points
+            .position
+            .par_iter()
+            .zip(points.velocity_gradient.par_iter_mut())
+            .for_each(|(x, l)| {
+                let c = cell_of(grid, *x);
+                let mean = cells.weighted[c] / cells.volume[c];
+                let shift = 0.5 * (mean - (l.x_axis.x + l.y_axis.y));
+                l.x_axis.x += shift;
+                l.y_axis.y += shift;
+            });
+    }
+}
+
+/// The density the constitutive update sees: each point's own `m/V`.
+pub fn point_density(mut bodies: Query<&mut Points>) {
+    for mut points in &mut bodies {
+        let points = &mut *points;
+        points
+            .density
+            .par_iter_mut()
+            .zip(points.mass.par_iter().zip(points.volume.par_iter()))
+            .for_each(|(rho, (&m, &v))| *rho = m / v);
+    }
+}
+
+/// The density the constitutive update sees: the mean `sum m / sum V` of the points in the
+/// point's cell (after they moved). The disconnected phase is then decided at the grid's
+/// resolution: a point that dilated on its own inside a dense cell (a sub-cell pore the grid
+/// cannot close) is not a granular gas, and rejoins the dense phase as soon as the cell is
+/// compressed (docs/numerics.md).
+pub fn cell_density(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation)>,
+) {
+    let grid = &*grid;
+    for (mut points, mut cells) in &mut bodies {
+        let points = &mut *points;
+        let cells = &mut *cells;
+        cells.volume.fill(0.0);
+        cells.weighted.fill(0.0);
+        for k in 0..points.len() {
+            let c = cell_of(grid, points.position[k]);
+            cells.volume[c] += points.volume[k];
+            cells.weighted[c] += points.mass[k];
+        }
+        points
+            .position
+            .par_iter()
+            .zip(points.density.par_iter_mut())
+            .for_each(|(x, rho)| {
+                let c = cell_of(grid, *x);
+                *rho = cells.weighted[c] / cells.volume[c];
+            });
+    }
+}
+
+/// Moves every point by its advection velocity and updates its volume, `V *= exp(dt tr L)`.
+/// A point is kept on the domain side of a `Slip` or `NoSlip` wall: interpolating between
+/// the wall's fixed nodes and moving interior nodes can carry a point a fraction of a step
+/// past the wall, which the material cannot do. A point stopped at a wall loses its velocity
+/// into the wall (otherwise FLIP would keep it for ever, since the wall's nodes have no
+/// acceleration). Past a `Free` side a point leaves, and the health check stops the run.
+pub fn advect_points(
+    grid: Res<GridGeometry>,
+    clock: Res<Clock>,
+    walls: Res<Boundaries>,
+    mut bodies: Query<&mut Points>,
+) {
+    let (dt, grid) = (clock.dt, &*grid);
+    let (lo, hi) = (grid.origin, grid.max());
+    let solid = |w: Wall| matches!(w, Wall::Slip | Wall::NoSlip);
+    let w = walls.0;
+    let min = DVec2::new(
+        if solid(w.left) {
+            lo.x
+        } else {
+            f64::NEG_INFINITY
+        },
+        if solid(w.bottom) {
+            lo.y
+        } else {
+            f64::NEG_INFINITY
+        },
+    );
+    let max = DVec2::new(
+        if solid(w.right) { hi.x } else { f64::INFINITY },
+        if solid(w.top) { hi.y } else { f64::INFINITY },
+    );
+    for mut points in &mut bodies {
+        let points = &mut *points;
+        points
+            .position
+            .par_iter_mut()
+            .zip(points.velocity.par_iter_mut())
             .zip(points.volume.par_iter_mut())
             .zip(
                 points
-                    .half_width
+                    .advection
                     .par_iter()
-                    .zip(points.advection.par_iter()),
+                    .zip(points.velocity_gradient.par_iter()),
             )
-            .for_each(|(((x, l), vol), (&a, &adv))| {
-                let stencil = Stencil::new::<S>(grid, *x, a);
-                *l = velocity_gradient(&stencil, &field.velocity);
-                advance(grid, x, vol, adv, *l, dt);
+            .for_each(|(((x, v), vol), (&adv, l))| {
+                let moved = grid.wrap(*x + dt * adv);
+                *x = moved.clamp(min, max);
+                for a in 0..2 {
+                    if (moved[a] < min[a] && v[a] < 0.0) || (moved[a] > max[a] && v[a] > 0.0) {
+                        v[a] = 0.0;
+                    }
+                }
+                *vol *= (dt * (l.x_axis.x + l.y_axis.y)).exp();
             });
     }
 }
