@@ -26,6 +26,7 @@ pub mod shape;
 pub mod sim;
 pub mod step;
 pub mod stress;
+pub mod verify;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.
 pub use bevy_ecs;

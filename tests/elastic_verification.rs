@@ -2,9 +2,10 @@
 
 mod common;
 
-use common::{scene, zero_crossings};
+use common::scene;
 use regolith::Simulation;
 use regolith::material::elastic::p_wave_modulus;
+use regolith::verify::{bar_mode_period, front_speed};
 
 const RHO: f64 = 1000.0;
 const E: f64 = 1.0e7;
@@ -14,29 +15,13 @@ fn wave_speed() -> f64 {
     (p_wave_modulus(E, NU) / RHO).sqrt()
 }
 
-/// Sets the first-mode velocity `v0 sin(pi x / 2L)` on the bar and returns the measured
-/// period from the zero crossings of the centre-of-mass velocity.
+/// Measured and analytic first-mode period of the shipped bar with overrides.
 fn bar_period(sets: &[&str]) -> (f64, f64) {
     let scene = scene("elastic_bar_vibration", sets);
-    let mut sim = Simulation::new(&scene);
-    let length = 1.0;
-    let v0 = 0.1;
-    {
-        let mut pts = sim.points_mut("bar").unwrap();
-        for k in 0..pts.len() {
-            let x = pts.position[k].x;
-            pts.velocity[k].x = v0 * (std::f64::consts::FRAC_PI_2 * x / length).sin();
-        }
-    }
-    sim.run(|_| {}).unwrap();
-    let tr = sim.trajectory();
-    let t = tr.series(0);
-    let vx = tr.series(tr.column("bar", "vx").unwrap());
-    // Skip the t = 0 row, recorded before the mode shape was set.
-    let z = zero_crossings(&t[1..], &vx[1..]);
-    assert!(z.len() >= 4, "too few zero crossings: {z:?}");
-    let measured = 2.0 * (z[z.len() - 1] - z[0]) / (z.len() - 1) as f64;
-    (measured, 4.0 * length / wave_speed())
+    let measured = bar_mode_period(&scene, "bar", 1.0, 0.1)
+        .unwrap()
+        .expect("the bar oscillates");
+    (measured, 4.0 / wave_speed())
 }
 
 /// Tolerance 1% (the issue's): at 50 cells along the bar the spatial error of mode 1 is
@@ -159,47 +144,9 @@ fn pulse_crosses_the_bar_at_the_p_wave_speed() {
                 &format!("integration={integration}"),
             ],
         );
-        let mut sim = Simulation::new(&scene);
-        let stations = [0.2, 0.4, 0.6, 0.8];
-        let mut arrival = [f64::NAN; 4];
-        let mut previous = [-1.0; 4];
-        let mut t_prev = 0.0;
-        while !sim.finished() {
-            sim.step().unwrap();
-            let t = sim.clock().time;
-            let pts = sim.points("bar").unwrap();
-            for (k, &xs) in stations.iter().enumerate() {
-                let (mut sum, mut count) = (0.0, 0.0);
-                for (x, v) in pts.position.iter().zip(&pts.velocity) {
-                    if (x.x - xs).abs() < 0.011 {
-                        sum += v.x;
-                        count += 1.0;
-                    }
-                }
-                let mean = sum / count;
-                if arrival[k].is_nan() && mean > -0.5 {
-                    arrival[k] =
-                        t_prev + (t - t_prev) * (-0.5 - previous[k]) / (mean - previous[k]);
-                }
-                previous[k] = mean;
-            }
-            t_prev = t;
-        }
-        assert!(
-            arrival.iter().all(|a| a.is_finite()),
-            "front did not reach every station: {arrival:?}"
-        );
-        let n = stations.len() as f64;
-        let (mx, mt) = (
-            stations.iter().sum::<f64>() / n,
-            arrival.iter().sum::<f64>() / n,
-        );
-        let slope: f64 = stations
-            .iter()
-            .zip(&arrival)
-            .map(|(x, t)| (x - mx) * (t - mt))
-            .sum::<f64>()
-            / arrival.iter().map(|t| (t - mt) * (t - mt)).sum::<f64>();
+        let slope = front_speed(&scene, "bar", &[0.2, 0.4, 0.6, 0.8], 0.011, 1.0)
+            .unwrap()
+            .expect("the front reaches every station");
         let err = (slope / wave_speed() - 1.0).abs();
         assert!(
             err < 0.03,

@@ -19,15 +19,3 @@ pub fn scene(name: &str, sets: &[&str]) -> Scene {
         .unwrap_or_else(|e| panic!("{e}"))
         .0
 }
-
-/// Times where `v` changes sign, linearly interpolated between samples.
-pub fn zero_crossings(t: &[f64], v: &[f64]) -> Vec<f64> {
-    let mut out = Vec::new();
-    for k in 1..t.len() {
-        let (a, b) = (v[k - 1], v[k]);
-        if a != 0.0 && a.signum() != b.signum() {
-            out.push(t[k - 1] + (t[k] - t[k - 1]) * a / (a - b));
-        }
-    }
-    out
-}

@@ -1,0 +1,160 @@
+//! Shape-function schemes: partition of unity, zero-sum gradients, linear completeness, and
+//! the documented clipping at the domain edge.
+
+use proptest::prelude::*;
+use regolith::glam::{DMat2, DVec2};
+use regolith::grid::GridGeometry;
+use regolith::integration::{CpdiFixed, Linear, Scheme, Stencil};
+
+fn grid(periodic: [bool; 2]) -> GridGeometry {
+    GridGeometry {
+        origin: DVec2::new(-0.3, 0.2),
+        cell_size: 0.05,
+        cells: [20, 12],
+        periodic,
+    }
+}
+
+/// Node position of a flat index (unwrapped for non-periodic grids).
+fn node_pos(g: &GridGeometry, n: usize) -> DVec2 {
+    let nx = g.nodes_along(0);
+    g.node_position(n % nx, n / nx)
+}
+
+struct Sums {
+    weight: f64,
+    gradient: DVec2,
+    position: DVec2,
+    position_gradient: DMat2,
+}
+
+fn sums<S: Scheme>(g: &GridGeometry, x: DVec2, a: f64) -> Sums {
+    let st = Stencil::new::<S>(g, x, a);
+    let mut s = Sums {
+        weight: 0.0,
+        gradient: DVec2::ZERO,
+        position: DVec2::ZERO,
+        position_gradient: DMat2::ZERO,
+    };
+    for (n, w, grad) in st.iter() {
+        let xi = node_pos(g, n);
+        s.weight += w;
+        s.gradient += grad;
+        s.position += w * xi;
+        s.position_gradient += DMat2::from_cols(xi * grad.x, xi * grad.y);
+    }
+    s
+}
+
+fn check_completeness<S: Scheme>(g: &GridGeometry, x: DVec2, a: f64) -> Result<(), TestCaseError> {
+    let s = sums::<S>(g, x, a);
+    prop_assert!(
+        (s.weight - 1.0).abs() < 1e-14,
+        "{}: sum S = {}",
+        S::NAME,
+        s.weight
+    );
+    prop_assert!(
+        s.gradient.length() < 1e-12,
+        "{}: sum grad S = {}",
+        S::NAME,
+        s.gradient
+    );
+    prop_assert!(
+        (s.position - x).length() < 1e-14,
+        "{}: sum S x_i = {} at {x}",
+        S::NAME,
+        s.position
+    );
+    let id = s.position_gradient - DMat2::IDENTITY;
+    prop_assert!(
+        id.x_axis.length() + id.y_axis.length() < 1e-12,
+        "{}: sum x_i grad S = {:?}",
+        S::NAME,
+        s.position_gradient
+    );
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(5000))]
+
+    /// Away from the edges both schemes are a partition of unity with zero-sum gradients and
+    /// reproduce linear fields: sum S x_i = x_p and sum x_i (outer) grad S = 1.
+    #[test]
+    fn interior_points_are_complete(fx in 0.0f64..1.0, fy in 0.0f64..1.0, ppc in 1usize..6) {
+        let g = grid([false, false]);
+        let a = 0.5 * g.cell_size / ppc as f64;
+        // at least a + one cell from every edge
+        let x = g.origin + DVec2::new(0.06 + fx * 0.88, 0.06 + fy * 0.48);
+        check_completeness::<Linear>(&g, x, a)?;
+        check_completeness::<CpdiFixed>(&g, x, a)?;
+    }
+
+    /// On periodic axes the same holds everywhere, the wrapped nodes standing in for the
+    /// missing ones (positions compared modulo the period).
+    #[test]
+    fn periodic_points_are_a_partition_of_unity(fx in 0.0f64..1.0, fy in 0.0f64..1.0) {
+        let g = grid([true, true]);
+        let x = g.origin + DVec2::new(fx, fy) * g.size();
+        for s in [sums::<Linear>(&g, x, 0.0125), sums::<CpdiFixed>(&g, x, 0.0125)] {
+            prop_assert!((s.weight - 1.0).abs() < 1e-14);
+            prop_assert!(s.gradient.length() < 1e-12);
+        }
+    }
+
+    /// Within `a` of a non-periodic edge the CPDI extent is clipped to the grid: the weights
+    /// still sum to one and the gradients to zero, and the weighted node position is the centre
+    /// of the clipped extent (docs/numerics.md).
+    #[test]
+    fn clipped_extents_keep_unity(fx in 0.0f64..1.0, side in 0usize..4) {
+        let g = grid([false, false]);
+        let a = 0.02;
+        let (lo, hi) = (g.origin, g.max());
+        let along = fx;
+        let depth = fx * a;
+        let x = match side {
+            0 => DVec2::new(lo.x + depth, lo.y + 0.1 + along * 0.3),
+            1 => DVec2::new(hi.x - depth, lo.y + 0.1 + along * 0.3),
+            2 => DVec2::new(lo.x + 0.1 + along * 0.7, lo.y + depth),
+            _ => DVec2::new(lo.x + 0.1 + along * 0.7, hi.y - depth),
+        };
+        let s = sums::<CpdiFixed>(&g, x, a);
+        prop_assert!((s.weight - 1.0).abs() < 1e-14);
+        prop_assert!(s.gradient.length() < 1e-12);
+        let clip = |v: f64, l: f64, h: f64| 0.5 * ((v - a).max(l) + (v + a).min(h));
+        let centre = DVec2::new(clip(x.x, lo.x, hi.x), clip(x.y, lo.y, hi.y));
+        prop_assert!((s.position - centre).length() < 1e-14, "{} vs {centre}", s.position);
+        let l = sums::<Linear>(&g, x, a);
+        prop_assert!((l.weight - 1.0).abs() < 1e-14 && (l.position - x).length() < 1e-14);
+    }
+}
+
+/// CPDI's gradient is continuous across a node (the point of the scheme); linear's jumps.
+#[test]
+fn cpdi_gradient_is_continuous_across_a_node() {
+    let g = grid([false, false]);
+    let node = g.node_position(8, 5);
+    let eps = 1e-9;
+    let grad_of = |x: DVec2, cpdi: bool| {
+        let st = if cpdi {
+            Stencil::new::<CpdiFixed>(&g, x, 0.0125)
+        } else {
+            Stencil::new::<Linear>(&g, x, 0.0125)
+        };
+        st.iter()
+            .find(|(n, _, _)| *n == g.index(8, 5))
+            .map(|(_, _, gr)| gr.x)
+            .unwrap_or(0.0)
+    };
+    let at = |dx: f64| node + DVec2::new(dx, 0.013);
+    let cpdi_jump = (grad_of(at(eps), true) - grad_of(at(-eps), true)).abs();
+    let linear_jump = (grad_of(at(eps), false) - grad_of(at(-eps), false)).abs();
+    // Continuous: across 2e-9 m the CPDI gradient changes by its slope (~1/(2 a h^2) =
+    // 1.6e4 /m^2) times the distance, ~3e-5; the linear one jumps by 2/h = 40 /m.
+    assert!(cpdi_jump < 1e-4, "CPDI gradient jumps by {cpdi_jump}");
+    assert!(
+        linear_jump > 1.0,
+        "linear gradient should jump, got {linear_jump}"
+    );
+}
