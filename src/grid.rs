@@ -79,7 +79,8 @@ pub struct GridField {
     pub velocity: Vec<DVec2>,
     /// Acceleration over the step (`a_i = f_i / m_i`), used by the FLIP update.
     pub acceleration: Vec<DVec2>,
-    /// Mass gradient `sum_p m_p grad S_ip`; filled only when contact needs normals.
+    /// Mass gradient `sum_p m_p grad S_i(x_p)` (out of the body at its surface nodes);
+    /// filled only when contact needs normals.
     pub mass_gradient: Vec<DVec2>,
     /// Nodes lighter than this carry no velocity (SCIENCE.md 2, step 4).
     pub mass_tolerance: f64,

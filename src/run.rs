@@ -135,6 +135,13 @@ pub fn summarize(
 /// field per body.
 pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
     let nodes = sim.grid().node_count();
+    let cells = sim.grid().cells[0] * sim.grid().cells[1];
+    let normals = scene.bodies.len() > 1 && scene.contact.needs_normals();
+    let averaging = if scene.dilatation == crate::scene::Dilatation::CellAveraged {
+        16 * cells
+    } else {
+        0
+    };
     let counts: Vec<usize> = sim.bodies().iter().map(|b| b.2).collect();
     scene
         .bodies
@@ -142,7 +149,8 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
         .zip(counts)
         .map(|(spec, n)| {
             n * (crate::body::Points::BYTES_PER_POINT + spec.material.history_bytes())
-                + nodes * GridField::bytes_per_node(false)
+                + nodes * GridField::bytes_per_node(normals)
+                + averaging
         })
         .sum()
 }

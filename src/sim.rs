@@ -6,7 +6,7 @@ use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 
 use crate::body::{Body, BodyState, PointStates, Points};
-use crate::contact::{self, Contact};
+use crate::contact::{self, Contact, ContactLaw};
 use crate::diagnostics::Health;
 use crate::error::Fault;
 use crate::fill::fill;
@@ -158,7 +158,7 @@ impl Simulation {
             let field = GridField::new(
                 grid.node_count(),
                 mass_tolerance(density, grid.cell_size),
-                false,
+                multi_body && scene.contact.needs_normals(),
             );
             let mut entity = world.spawn((
                 body,
@@ -176,9 +176,13 @@ impl Simulation {
             }
         }
         if multi_body {
+            world.insert_resource(ContactLaw(scene.contact.clone()));
             match scene.contact {
                 Contact::NoSlip => {
                     schedule.add_systems(contact::no_slip.in_set(StepSet::Contact));
+                }
+                Contact::Frictional { .. } => {
+                    schedule.add_systems(contact::frictional.in_set(StepSet::Contact));
                 }
             }
         }

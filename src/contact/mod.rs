@@ -1,25 +1,120 @@
 //! Interaction between bodies at the grid nodes they share (the Contact set).
 //!
-//! Only scenes with two or more bodies get a contact system. `NoSlip` is the classic MPM
-//! default: at every node where two or more bodies have mass, all of them move with the
-//! nodes' common centre-of-mass velocity. It is written as a force added to each body's
-//! nodal force, `f_c = (m_b v_cm - p~_b) / dt`, so the FLIP update sees it and the forces sum
-//! to zero (momentum is conserved). Because every body is constrained by the walls before,
-//! the common velocity respects them too.
+//! Only scenes with two or more bodies get a contact system. Two laws:
+//!
+//! * `NoSlip`, the classic MPM default: at every node where two or more bodies have mass all
+//!   of them take the nodes' common centre-of-mass velocity.
+//! * `Frictional(friction: mu)`: Bardenhagen et al. (2001) as refined by Huang et al. (2011),
+//!   run once per step before the stress update (update-stress-last form, SCIENCE.md 5).
+//!   At a shared node each body is compared with the centre of mass of all bodies there:
+//!   with `dv = v~_b - v_cm` and the unit normal `n` from body b towards the others (from the
+//!   bodies' mass gradients), it acts only if `dv . n > 0` (approaching): it removes the
+//!   normal part of `dv` and as much of the tangential part as Coulomb allows,
+//!   `|dp_t| <= mu |dp_n|`. Separating bodies feel nothing: no glue, no tension. For two
+//!   bodies the normals are opposite and the two momentum changes cancel exactly.
+//!
+//! Both are written as a force added to each body's nodal force, so the FLIP update sees
+//! them. The contact switches on as soon as two bodies share a node, up to about one cell
+//! before their points touch.
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::Deserialize;
 
-use crate::grid::GridField;
-use crate::sim::Clock;
+use crate::body::Body;
+use crate::grid::{GridField, GridGeometry};
+use crate::sim::{Boundaries, Clock};
+use crate::step::apply_walls;
 
 /// The contact law between bodies.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 pub enum Contact {
     /// One shared velocity at shared nodes (bodies stick together once they share a node).
     #[default]
     NoSlip,
+    /// Coulomb friction with coefficient `friction` between surfaces; no force on
+    /// separating bodies.
+    Frictional {
+        /// The surface friction coefficient `mu_surf` (the paper uses 0.1).
+        friction: f64,
+        /// Where the contact normal comes from; default `Common`.
+        #[serde(default)]
+        normal: NormalRule,
+    },
+}
+
+/// How the contact normal at a node is made.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub enum NormalRule {
+    /// From the difference of the bodies' mass gradients (Huang et al.): symmetric, but
+    /// diagonal at a body's corners, where it reads a flat surface as an obstacle.
+    #[default]
+    Common,
+    /// From the named body's mass gradient alone, for every body in contact with it: exact
+    /// for a flat or smooth body (a slab, an intruder) whatever the other's corners.
+    Body(String),
+}
+
+impl Contact {
+    /// Whether the law needs the bodies' mass gradients (surface normals).
+    pub fn needs_normals(&self) -> bool {
+        matches!(self, Contact::Frictional { .. })
+    }
+}
+
+/// One body's trial state at one node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeBody {
+    pub mass: f64,
+    /// Trial momentum `p~ = p + dt f`.
+    pub momentum: DVec2,
+    /// Mass gradient `sum_p m_p grad S_i(x_p)`: at a surface node it points out of the body.
+    pub mass_gradient: DVec2,
+}
+
+/// The momentum changes frictional contact makes at one node, one per body (zero for bodies
+/// that are separating or have no defined normal). With `reference`, every normal comes from
+/// that body's mass gradient alone; otherwise from the difference of gradients. Normals
+/// closer to zero than `normal_tolerance` are treated as undefined.
+pub fn frictional_impulses(
+    bodies: &[NodeBody],
+    friction: f64,
+    reference: Option<usize>,
+    normal_tolerance: f64,
+) -> Vec<DVec2> {
+    let mass: f64 = bodies.iter().map(|b| b.mass).sum();
+    let momentum: DVec2 = bodies.iter().map(|b| b.momentum).sum();
+    let gradient: DVec2 = bodies.iter().map(|b| b.mass_gradient).sum();
+    let v_cm = momentum / mass;
+    bodies
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            // `sum m grad S_i(x_p)` points out of a body (from its points towards the node):
+            // b's points towards the others, theirs towards b, so the difference is the
+            // common normal from b into the others.
+            let towards = match reference {
+                Some(r) if r == k => b.mass_gradient,
+                Some(r) => -bodies[r].mass_gradient,
+                None => b.mass_gradient - (gradient - b.mass_gradient),
+            };
+            let len = towards.length();
+            if len <= normal_tolerance {
+                return DVec2::ZERO;
+            }
+            let n = towards / len;
+            let dv = b.momentum / b.mass - v_cm;
+            let approach = dv.dot(n);
+            if approach <= 0.0 {
+                return DVec2::ZERO;
+            }
+            let tangential = dv - approach * n;
+            let slip = tangential.length();
+            let limit = friction * approach;
+            let kept = if slip > limit { limit / slip } else { 1.0 };
+            -b.mass * (approach * n + kept * tangential)
+        })
+        .collect()
 }
 
 /// Adds the contact force that gives every body at a shared node the common velocity.
@@ -43,15 +138,113 @@ pub fn no_slip(clock: Res<Clock>, mut fields: Query<&mut GridField>) {
         }
         let v_cm = momentum / mass;
         for f in fields.iter_mut() {
-            let m = f.mass[n];
-            if m > f.mass_tolerance {
-                let target = m * v_cm;
-                let fc = (target - f.momentum[n]) / dt;
-                f.force[n] += fc;
-                f.momentum[n] = target;
-                f.velocity[n] = v_cm;
-                f.acceleration[n] = f.force[n] / m;
+            if f.mass[n] > f.mass_tolerance {
+                let impulse = f.mass[n] * v_cm - f.momentum[n];
+                apply_impulse(f, n, impulse, dt);
             }
         }
+    }
+}
+
+/// Adds `impulse` to a body's momentum at node `n` as a force over the step.
+fn apply_impulse(f: &mut GridField, n: usize, impulse: DVec2, dt: f64) {
+    let m = f.mass[n];
+    f.force[n] += impulse / dt;
+    f.momentum[n] += impulse;
+    f.velocity[n] = f.momentum[n] / m;
+    f.acceleration[n] = f.force[n] / m;
+}
+
+/// The frictional contact law, with walls applied again afterwards (a contact normal that
+/// is not parallel to a wall could otherwise push a wall node through it).
+pub fn frictional(
+    clock: Res<Clock>,
+    contact: Res<ContactLaw>,
+    grid: Res<GridGeometry>,
+    walls: Res<Boundaries>,
+    mut bodies: Query<(&Body, &mut GridField)>,
+) {
+    let Contact::Frictional { friction, normal } = &contact.0 else {
+        return;
+    };
+    let friction = *friction;
+    let dt = clock.dt;
+    let mut named = Vec::new();
+    let mut fields: Vec<Mut<GridField>> = Vec::new();
+    for (body, field) in bodies.iter_mut() {
+        named.push(matches!(normal, NormalRule::Body(n) if *n == body.name));
+        fields.push(field);
+    }
+    let nodes = fields.first().map_or(0, |f| f.mass.len());
+    let mut at_node = Vec::with_capacity(fields.len());
+    let mut which = Vec::with_capacity(fields.len());
+    for n in 0..nodes {
+        at_node.clear();
+        which.clear();
+        for (b, f) in fields.iter().enumerate() {
+            if f.mass[n] > f.mass_tolerance {
+                at_node.push(NodeBody {
+                    mass: f.mass[n],
+                    momentum: f.momentum[n],
+                    mass_gradient: f.mass_gradient[n],
+                });
+                which.push(b);
+            }
+        }
+        if at_node.len() < 2 {
+            continue;
+        }
+        // A normal is undefined when the mass gradients nearly cancel: below a millionth
+        // of the typical gradient magnitude m / h at this node.
+        let scale: f64 = at_node.iter().map(|b| b.mass).sum::<f64>() / grid.cell_size;
+        let reference = which.iter().position(|&b| named[b]);
+        let impulses = frictional_impulses(&at_node, friction, reference, 1e-6 * scale);
+        for (&b, impulse) in which.iter().zip(impulses) {
+            if impulse != DVec2::ZERO {
+                apply_impulse(&mut fields[b], n, impulse, dt);
+            }
+        }
+    }
+    for f in fields.iter_mut() {
+        apply_walls(&grid, &walls.0, f, Some(dt));
+    }
+}
+
+/// The scene's contact law, as a resource for the contact systems.
+#[derive(Resource, Clone, Debug)]
+pub struct ContactLaw(pub Contact);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn body(m: f64, v: DVec2, g: DVec2) -> NodeBody {
+        NodeBody {
+            mass: m,
+            momentum: m * v,
+            mass_gradient: g,
+        }
+    }
+
+    #[test]
+    fn separating_bodies_feel_nothing() {
+        // A above (its outward normal at the node points down), moving up; B below, at rest.
+        let a = body(1.0, DVec2::new(0.3, 1.0), DVec2::new(0.0, -2.0));
+        let b = body(2.0, DVec2::ZERO, DVec2::new(0.0, 3.0));
+        assert_eq!(
+            frictional_impulses(&[a, b], 0.5, None, 1e-12),
+            vec![DVec2::ZERO; 2]
+        );
+    }
+
+    #[test]
+    fn frictionless_contact_removes_only_the_normal_approach() {
+        let a = body(1.0, DVec2::new(0.7, -1.0), DVec2::new(0.0, -2.0));
+        let b = body(3.0, DVec2::ZERO, DVec2::new(0.0, 3.0));
+        let dp = frictional_impulses(&[a, b], 0.0, None, 1e-12);
+        assert!(dp[0].x.abs() < 1e-15 && dp[1].x.abs() < 1e-15);
+        // A's normal velocity becomes the common one: v_cm,y = -1/4.
+        assert!(((a.momentum.y + dp[0].y) / a.mass + 0.25).abs() < 1e-15);
+        assert!((dp[0] + dp[1]).length() < 1e-15);
     }
 }

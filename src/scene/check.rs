@@ -3,6 +3,7 @@
 use std::collections::HashSet;
 
 use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
+use crate::contact::{Contact, NormalRule};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
@@ -148,6 +149,24 @@ impl Scene {
                 "flip",
                 format!("flip must lie in [0, 1] (1 = pure FLIP), got {}", self.flip),
             );
+        }
+        if let Contact::Frictional { friction, normal } = &self.contact {
+            if !(friction.is_finite() && *friction >= 0.0) {
+                return err(
+                    "friction",
+                    format!("the contact friction must be a non-negative number, got {friction}"),
+                );
+            }
+            if let NormalRule::Body(name) = normal
+                && !self.bodies.iter().any(|b| b.name == *name)
+            {
+                return err(
+                    "normal",
+                    format!(
+                        "the contact normal names body \"{name}\", which the scene does not have"
+                    ),
+                );
+            }
         }
         if self.bodies.is_empty() {
             return err("bodies", "the scene needs at least one body".to_string());

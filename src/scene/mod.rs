@@ -46,7 +46,8 @@ pub struct Scene {
     /// How the dilatation `tr L` is taken: `CellAveraged` (default) or `PerPoint`.
     #[serde(default)]
     pub dilatation: Dilatation,
-    /// How bodies interact where they share grid nodes; default `NoSlip`.
+    /// How bodies interact where they share grid nodes: `NoSlip` (default) or
+    /// `Frictional(friction: mu)`.
     #[serde(default)]
     pub contact: Contact,
     /// FLIP fraction of the point velocity update: 1 is pure FLIP (the paper), 0 pure PIC.
