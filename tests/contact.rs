@@ -70,36 +70,30 @@ fn incline(theta_deg: f64, mu: f64) -> regolith::Scene {
     )
 }
 
-/// Least-squares acceleration of x(t) = x0 + v0 t + a t^2 / 2.
+/// Least-squares acceleration of x(t) = x0 + v0 t + a t^2 / 2 (normal equations solved by
+/// Cramer's rule).
 fn fitted_acceleration(t: &[f64], x: &[f64]) -> f64 {
-    // normal equations for [1, t, t^2/2]
     let mut m = [[0.0; 3]; 3];
     let mut r = [0.0; 3];
     for (&ti, &xi) in t.iter().zip(x) {
         let row = [1.0, ti, 0.5 * ti * ti];
-        for i in 0..3 {
-            r[i] += row[i] * xi;
-            for j in 0..3 {
-                m[i][j] += row[i] * row[j];
+        for (i, ri) in row.iter().enumerate() {
+            r[i] += ri * xi;
+            for (j, rj) in row.iter().enumerate() {
+                m[i][j] += ri * rj;
             }
         }
     }
-    // Gaussian elimination
-    for c in 0..3 {
-        for rr in c + 1..3 {
-            let f = m[rr][c] / m[c][c];
-            for k in c..3 {
-                m[rr][k] -= f * m[c][k];
-            }
-            r[rr] -= f * r[c];
-        }
+    let det = |a: [[f64; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let mut third = m;
+    for i in 0..3 {
+        third[i][2] = r[i];
     }
-    let mut sol = [0.0; 3];
-    for i in (0..3).rev() {
-        let s: f64 = (i + 1..3).map(|k| m[i][k] * sol[k]).sum();
-        sol[i] = (r[i] - s) / m[i][i];
-    }
-    sol[2]
+    det(third) / det(m)
 }
 
 /// Above the friction angle the block slides with `g (sin theta - mu cos theta)`; the fit
