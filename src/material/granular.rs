@@ -143,6 +143,22 @@ fn resolve_critical_density(
     }
 }
 
+/// `(G, K, rho_c)` from the elasticity and density parameters both scene names share.
+fn resolve_elastic_and_density(
+    moduli: [Option<f64>; 4],
+    critical: Option<f64>,
+    packing: Option<f64>,
+    grain_density: Option<f64>,
+) -> Result<(f64, f64, f64), String> {
+    let [e, nu, k, g] = moduli;
+    let (shear, bulk) = resolve_moduli(e, nu, k, g)?;
+    if let Some(rs) = grain_density {
+        check_positive("grain_density", rs, "kg/m^3")?;
+    }
+    let critical_density = resolve_critical_density(critical, packing, grain_density)?;
+    Ok((shear, bulk, critical_density))
+}
+
 fn check_positive(name: &str, v: f64, unit: &str) -> Result<(), String> {
     if v.is_finite() && v > 0.0 {
         Ok(())
@@ -185,14 +201,13 @@ struct MuIParams {
 impl TryFrom<MuIParams> for MuI {
     type Error = String;
     fn try_from(p: MuIParams) -> Result<Self, String> {
-        let (shear, bulk) = resolve_moduli(
-            p.youngs_modulus,
-            p.poisson_ratio,
-            p.bulk_modulus,
-            p.shear_modulus,
-        )?;
-        check_positive("grain_density", p.grain_density, "kg/m^3")?;
-        let critical_density = resolve_critical_density(
+        let (shear, bulk, critical_density) = resolve_elastic_and_density(
+            [
+                p.youngs_modulus,
+                p.poisson_ratio,
+                p.bulk_modulus,
+                p.shear_modulus,
+            ],
             p.critical_density,
             p.packing_fraction,
             Some(p.grain_density),
@@ -240,17 +255,17 @@ struct DruckerPragerParams {
 impl TryFrom<DruckerPragerParams> for DruckerPrager {
     type Error = String;
     fn try_from(p: DruckerPragerParams) -> Result<Self, String> {
-        let (shear, bulk) = resolve_moduli(
-            p.youngs_modulus,
-            p.poisson_ratio,
-            p.bulk_modulus,
-            p.shear_modulus,
+        let (shear, bulk, critical_density) = resolve_elastic_and_density(
+            [
+                p.youngs_modulus,
+                p.poisson_ratio,
+                p.bulk_modulus,
+                p.shear_modulus,
+            ],
+            p.critical_density,
+            p.packing_fraction,
+            p.grain_density,
         )?;
-        if let Some(rs) = p.grain_density {
-            check_positive("grain_density", rs, "kg/m^3")?;
-        }
-        let critical_density =
-            resolve_critical_density(p.critical_density, p.packing_fraction, p.grain_density)?;
         check_friction(p.mu_s)?;
         // With mu_2 = mu_s the return is tau = mu_s p whatever the rate, so the grain
         // scale only has to be finite and positive.

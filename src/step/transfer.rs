@@ -195,6 +195,23 @@ impl CellDilatation {
             weighted: vec![0.0; cells],
         }
     }
+
+    /// Per-cell sums of the points' volumes and of `value(k)`.
+    fn sum(&mut self, grid: &GridGeometry, points: &Points, value: impl Fn(usize) -> f64) {
+        self.volume.fill(0.0);
+        self.weighted.fill(0.0);
+        for k in 0..points.len() {
+            let c = cell_of(grid, points.position[k]);
+            self.volume[c] += points.volume[k];
+            self.weighted[c] += value(k);
+        }
+    }
+
+    /// `sum value / sum V` of the cell holding `x`.
+    fn per_volume(&self, grid: &GridGeometry, x: DVec2) -> f64 {
+        let c = cell_of(grid, x);
+        self.weighted[c] / self.volume[c]
+    }
 }
 
 /// The cell a point lies in (clamped into the grid).
@@ -219,21 +236,16 @@ pub fn average_dilatation(
     for (mut points, mut cells) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        cells.volume.fill(0.0);
-        cells.weighted.fill(0.0);
-        for k in 0..points.len() {
-            let c = cell_of(grid, points.position[k]);
+        cells.sum(grid, points, |k| {
             let l = points.velocity_gradient[k];
-            cells.volume[c] += points.volume[k];
-            cells.weighted[c] += points.volume[k] * (l.x_axis.x + l.y_axis.y);
-        }
+            points.volume[k] * (l.x_axis.x + l.y_axis.y)
+        });
         points
             .position
             .par_iter()
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(x, l)| {
-                let c = cell_of(grid, *x);
-                let mean = cells.weighted[c] / cells.volume[c];
+                let mean = cells.per_volume(grid, *x);
                 let shift = 0.5 * (mean - (l.x_axis.x + l.y_axis.y));
                 l.x_axis.x += shift;
                 l.y_axis.y += shift;
@@ -266,21 +278,12 @@ pub fn cell_density(
     for (mut points, mut cells) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        cells.volume.fill(0.0);
-        cells.weighted.fill(0.0);
-        for k in 0..points.len() {
-            let c = cell_of(grid, points.position[k]);
-            cells.volume[c] += points.volume[k];
-            cells.weighted[c] += points.mass[k];
-        }
+        cells.sum(grid, points, |k| points.mass[k]);
         points
             .position
             .par_iter()
             .zip(points.density.par_iter_mut())
-            .for_each(|(x, rho)| {
-                let c = cell_of(grid, *x);
-                *rho = cells.weighted[c] / cells.volume[c];
-            });
+            .for_each(|(x, rho)| *rho = cells.per_volume(grid, *x));
     }
 }
 
