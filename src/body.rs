@@ -5,12 +5,12 @@
 
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::stress::Stress;
 
 /// The material points of one body (SCIENCE.md 1).
-#[derive(Component, Clone, Debug, Default)]
+#[derive(Component, Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Points {
     pub position: Vec<DVec2>,
     pub velocity: Vec<DVec2>,
@@ -45,7 +45,7 @@ impl Points {
 }
 
 /// The state of the material at a point, as the constitutive update classifies it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Phase {
     /// Dense and below the yield surface (elastic).
     #[default]
@@ -68,7 +68,7 @@ impl Phase {
 }
 
 /// Public per-point results of the constitutive update, for diagnostics and outputs.
-#[derive(Component, Clone, Debug, Default)]
+#[derive(Component, Clone, Debug, Default, Serialize, Deserialize)]
 pub struct PointStates {
     /// Equivalent plastic shear strain rate of the last step (1/s).
     pub plastic_strain_rate: Vec<f64>,

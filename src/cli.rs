@@ -1,4 +1,5 @@
-//! The command line: `regolith run` a scene, or `check` it without running.
+//! The command line: `regolith run` a scene, `check` it without running, or `resume` a run
+//! from its checkpoint.
 //!
 //! Every error ends the program with a non-zero status and one line on stderr that says what
 //! and where; nothing a user types or writes in a scene may cause a panic. A plugin crate
@@ -14,8 +15,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::Regolith;
 use crate::error::Error;
+use crate::output::summary::Summary;
 use crate::registry::Registries;
-use crate::run::{Provenance, memory_estimate, run_scene};
+use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
 use crate::scene::{InitialStress, Scene, TimeStep};
 use crate::sim::{Clock, Simulation};
 
@@ -45,13 +47,41 @@ enum Command {
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
+        /// Write checkpoint.bin every N steps (for `regolith resume`).
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        checkpoint_every: Option<u64>,
+        /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
+        #[arg(long)]
+        allow_unstable: bool,
+    },
+    /// Continue a run from the checkpoint.bin in its output directory.
+    Resume {
+        /// The run's output directory.
+        dir: PathBuf,
+        #[arg(long, short)]
+        quiet: bool,
+        /// Keep writing checkpoint.bin every N steps.
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+        checkpoint_every: Option<u64>,
     },
     /// Validate a scene and print the resolved setup without running it.
     Check {
         scene: PathBuf,
         #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
         sets: Vec<String>,
+        /// Accept a fixed time step above the CFL limit (sets time.allow_unstable).
+        #[arg(long)]
+        allow_unstable: bool,
     },
+}
+
+/// `--allow-unstable` as the override it stands for.
+fn with_flags(sets: Vec<String>, allow_unstable: bool) -> Vec<String> {
+    let mut sets = sets;
+    if allow_unstable {
+        sets.push("time.allow_unstable=true".to_string());
+    }
+    sets
 }
 
 /// Parses the process arguments and runs the command with the plugins of `app`.
@@ -64,8 +94,26 @@ pub fn main_with(app: Regolith) -> ExitCode {
             out,
             sets,
             quiet,
-        } => run(&registries, &scene, out, &sets, quiet),
-        Command::Check { scene, sets } => check(&registries, &scene, &sets),
+            checkpoint_every,
+            allow_unstable,
+        } => run(
+            &registries,
+            &scene,
+            out,
+            &with_flags(sets, allow_unstable),
+            quiet,
+            CheckpointEvery(checkpoint_every),
+        ),
+        Command::Resume {
+            dir,
+            quiet,
+            checkpoint_every,
+        } => resume(&registries, &dir, quiet, CheckpointEvery(checkpoint_every)),
+        Command::Check {
+            scene,
+            sets,
+            allow_unstable,
+        } => check(&registries, &scene, &with_flags(sets, allow_unstable)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -76,50 +124,34 @@ pub fn main_with(app: Regolith) -> ExitCode {
     }
 }
 
-fn run(
-    registries: &Rc<Registries>,
-    path: &Path,
-    out: Option<PathBuf>,
-    sets: &[String],
-    quiet: bool,
-) -> Result<(), Error> {
-    let (scene, text) = Scene::load(path, sets, registries)?;
-    for w in scene.warnings() {
-        eprintln!("warning: {w}");
+/// A progress bar on stderr (hidden with `--quiet`), redrawn every 50 steps.
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
     }
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:30} {percent:>3}% ETA {eta} {msg}",
-            )
-            .expect("a fixed template is valid"),
-        );
-        bar.enable_steady_tick(Duration::from_millis(250));
-        bar
-    };
-    let mut last_draw = 0u64;
-    let mut progress = |c: &Clock| {
-        if c.step - last_draw >= 50 || c.time >= c.end {
-            last_draw = c.step;
-            bar.set_position((1000.0 * c.time / c.end) as u64);
-            bar.set_message(format!(
-                "step {} t = {:.4e} s dt = {:.2e} s",
-                c.step, c.time, c.dt
-            ));
-        }
-    };
-    let from = Provenance {
-        file: &path.display().to_string(),
-        text: &text,
-        overrides: sets,
-    };
-    let result = run_scene(&scene, &from, &out, &mut progress);
-    bar.finish_and_clear();
-    let summary = result?;
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {percent:>3}% ETA {eta} {msg}",
+        )
+        .expect("a fixed template is valid"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(250));
+    bar
+}
+
+fn draw(bar: &ProgressBar, last_draw: &mut u64, c: &Clock) {
+    if c.step - *last_draw >= 50 || c.time >= c.end {
+        *last_draw = c.step;
+        bar.set_position((1000.0 * c.time / c.end) as u64);
+        bar.set_message(format!(
+            "step {} t = {:.4e} s dt = {:.2e} s",
+            c.step, c.time, c.dt
+        ));
+    }
+}
+
+fn report(summary: &Summary, out: &Path) {
     println!(
         "{}: {} steps to t = {} s, {} points, {:.1} s wall, {:.3e} particle-steps/s, max CFL {:.3}; outputs in {}",
         summary.scene,
@@ -131,6 +163,47 @@ fn run(
         summary.cfl,
         out.display()
     );
+}
+
+fn run(
+    registries: &Rc<Registries>,
+    path: &Path,
+    out: Option<PathBuf>,
+    sets: &[String],
+    quiet: bool,
+    checkpoints: CheckpointEvery,
+) -> Result<(), Error> {
+    let (scene, text) = Scene::load(path, sets, registries)?;
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let bar = progress_bar(quiet);
+    let mut last_draw = 0u64;
+    let mut progress = |c: &Clock| draw(&bar, &mut last_draw, c);
+    let from = Provenance {
+        file: &path.display().to_string(),
+        text: &text,
+        overrides: sets,
+    };
+    let result = run_scene(&scene, &from, &out, checkpoints, &mut progress);
+    bar.finish_and_clear();
+    report(&result?, &out);
+    Ok(())
+}
+
+fn resume(
+    registries: &Rc<Registries>,
+    dir: &Path,
+    quiet: bool,
+    checkpoints: CheckpointEvery,
+) -> Result<(), Error> {
+    let bar = progress_bar(quiet);
+    let mut last_draw = 0u64;
+    let mut progress = |c: &Clock| draw(&bar, &mut last_draw, c);
+    let result = resume_run(registries, dir, checkpoints, &mut progress);
+    bar.finish_and_clear();
+    report(&result?, dir);
     Ok(())
 }
 

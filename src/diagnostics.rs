@@ -5,17 +5,77 @@
 //! which the runner turns into a failed (but kept) run.
 
 use bevy_ecs::prelude::*;
+use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::body::{Body, BodyState, Points};
 use crate::error::Fault;
 use crate::grid::GridGeometry;
-use crate::sim::Clock;
+use crate::sim::{Clock, Gravity};
 
 /// The first fault seen, if any.
 #[derive(Resource, Debug, Default)]
 pub struct Health {
     pub fault: Option<Fault>,
+}
+
+/// The kinetic energy past which a run is declared diverging (J/m); `None` until the first
+/// step sets the default (see `scene::Limits`).
+#[derive(Resource, Debug, Default)]
+pub struct EnergyLimit {
+    pub bound: Option<f64>,
+}
+
+/// Stops a run whose total kinetic energy exceeds its bound. Without an explicit bound, the
+/// first step sets ten times the kinetic plus potential energy then, plus the kinetic
+/// energy of every body moving at 1% of its p-wave speed (what a 1% elastic strain stores):
+/// no source in the model adds energy, so only a numerical blow-up crosses it.
+pub fn check_energy(
+    clock: Res<Clock>,
+    grid: Res<GridGeometry>,
+    gravity: Res<Gravity>,
+    mut limit: ResMut<EnergyLimit>,
+    mut health: ResMut<Health>,
+    bodies: Query<(&Body, &BodyState)>,
+) {
+    if health.fault.is_some() {
+        return;
+    }
+    let kinetic: f64 = bodies.iter().map(|(_, s)| s.kinetic_energy).sum();
+    let Some(bound) = limit.bound else {
+        let g = gravity.0;
+        let (lo, hi) = (grid.origin, grid.max());
+        let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
+        let lowest = corners
+            .iter()
+            .map(|c| -g.dot(*c))
+            .fold(f64::INFINITY, f64::min);
+        let energy: f64 = bodies
+            .iter()
+            .map(|(b, s)| {
+                let potential = s.mass * (-g.dot(s.centre_of_mass) - lowest);
+                let strain = 0.5 * s.mass * (0.01 * b.wave_speed).powi(2);
+                10.0 * (s.kinetic_energy + potential) + strain
+            })
+            .sum();
+        limit.bound = Some(energy);
+        return;
+    };
+    if kinetic > bound {
+        let (body, state) = bodies
+            .iter()
+            .max_by(|a, b| a.1.kinetic_energy.total_cmp(&b.1.kinetic_energy))
+            .map(|(b, s)| (b.name.clone(), *s))
+            .unwrap_or_default();
+        health.fault = Some(Fault {
+            step: clock.step,
+            time: clock.time,
+            message: format!(
+                "the kinetic energy {kinetic:.3e} J/m exceeds its bound {bound:.3e} J/m (set limits.max_kinetic_energy to change it): the run is diverging; body \"{body}\" carries {:.3e} J/m and its fastest point moves at {:.3e} m/s",
+                state.kinetic_energy, state.max_speed
+            ),
+        });
+    }
 }
 
 /// Refreshes every body's centre of mass, velocity, kinetic energy and top speed.

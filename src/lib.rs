@@ -9,6 +9,7 @@
 //! See ARCHITECTURE.md for the layout and docs/scenes.md for the scene format.
 
 pub mod body;
+pub mod checkpoint;
 pub mod cli;
 pub mod contact;
 pub mod diagnostics;

@@ -2,14 +2,17 @@
 //!
 //! Outputs land in the run directory as the run goes: `scene.ron` (the text that ran, with
 //! overrides applied), `trajectory.csv` (streamed as `trajectory.csv.part`, renamed at the
-//! end) and `summary.json` (written atomically last). A run that stops on a fault still
-//! writes all of them, with `"status": "failed"` and the reason in the summary.
+//! end), `checkpoint.bin` when asked (atomically, every N steps) and `summary.json` (written
+//! atomically last). A run that stops on a fault still writes all of them, with
+//! `"status": "failed"` and the reason in the summary. `resume_run` continues a run from its
+//! checkpoint.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use crate::error::{Error, Fault};
+use crate::checkpoint::Checkpoint;
+use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
@@ -35,32 +38,94 @@ impl<F: FnMut(&Clock)> Progress for F {
     }
 }
 
+/// How often a run writes `checkpoint.bin` (every this many steps), if at all.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CheckpointEvery(pub Option<u64>);
+
+fn io_error(out: &Path, what: &str) -> impl FnOnce(std::io::Error) -> Error {
+    let what = format!("{what} in {}", out.display());
+    move |e| Error::io(what, e)
+}
+
 /// Runs `scene` to its end time writing into `out`; returns the summary, or the fault after
 /// the summary of the failed run has been written.
 pub fn run_scene(
     scene: &Scene,
     from: &Provenance,
     out: &Path,
+    checkpoints: CheckpointEvery,
     progress: &mut dyn Progress,
 ) -> Result<Summary, Error> {
-    let io = |what: &str| {
-        let what = format!("{what} in {}", out.display());
-        move |e| Error::io(what, e)
-    };
-    std::fs::create_dir_all(out).map_err(io("cannot create the output directory"))?;
+    std::fs::create_dir_all(out).map_err(io_error(out, "cannot create the output directory"))?;
     write_atomic(&out.join("scene.ron"), from.text.as_bytes())
-        .map_err(io("cannot write scene.ron"))?;
-    let mut sim = Simulation::with_output(scene, out).map_err(io("cannot start trajectory.csv"))?;
+        .map_err(io_error(out, "cannot write scene.ron"))?;
+    let sim = Simulation::with_output(scene, out)
+        .map_err(io_error(out, "cannot start trajectory.csv"))?;
+    run_to_end(sim, scene, from, out, checkpoints, progress)
+}
+
+/// Continues the run in `out` from its `checkpoint.bin`, with the scene text it started
+/// from (`scene.ron`); the result is bitwise identical to a run never interrupted.
+pub fn resume_run(
+    registries: &std::rc::Rc<crate::registry::Registries>,
+    out: &Path,
+    checkpoints: CheckpointEvery,
+    progress: &mut dyn Progress,
+) -> Result<Summary, Error> {
+    let scene_path = out.join("scene.ron");
+    let text =
+        std::fs::read_to_string(&scene_path).map_err(io_error(out, "cannot read scene.ron"))?;
+    let scene = Scene::parse(&text, &scene_path.display().to_string(), registries)?;
+    let checkpoint = Checkpoint::read(&out.join("checkpoint.bin"))
+        .map_err(|e| Error::Scene(SceneError::file(&out.display().to_string(), e)))?;
+    let (file, overrides) = (checkpoint.scene_file.clone(), checkpoint.overrides.clone());
+    let mut sim = Simulation::new(&scene);
+    checkpoint
+        .restore(&mut sim, &scene)
+        .map_err(|e| Error::Scene(SceneError::file(&out.display().to_string(), e)))?;
+    sim.write_to(out)
+        .map_err(io_error(out, "cannot reopen trajectory.csv"))?;
+    let from = Provenance {
+        file: &file,
+        text: &text,
+        overrides: &overrides,
+    };
+    run_to_end(sim, &scene, &from, out, checkpoints, progress)
+}
+
+fn run_to_end(
+    mut sim: Simulation,
+    scene: &Scene,
+    from: &Provenance,
+    out: &Path,
+    checkpoints: CheckpointEvery,
+    progress: &mut dyn Progress,
+) -> Result<Summary, Error> {
     let started = Instant::now();
-    let result = sim.run(|c| progress.step(c));
+    let mut result = Ok(());
+    while !sim.finished() {
+        if let Err(f) = sim.step() {
+            result = Err(f);
+            break;
+        }
+        progress.step(sim.clock());
+        if let Some(every) = checkpoints.0
+            && sim.clock().step.is_multiple_of(every)
+            && !sim.finished()
+        {
+            Checkpoint::capture(&mut sim, scene, from.file, from.overrides)
+                .write(&out.join("checkpoint.bin"))
+                .map_err(io_error(out, "cannot write checkpoint.bin"))?;
+        }
+    }
     let wall = started.elapsed().as_secs_f64();
     sim.trajectory_mut()
         .close()
-        .map_err(io("cannot finish trajectory.csv"))?;
+        .map_err(io_error(out, "cannot finish trajectory.csv"))?;
     let summary = summarize(&mut sim, scene, from, wall, result.as_ref().err());
     let json = serde_json::to_string_pretty(&summary).expect("a summary always serialises");
     write_atomic(&out.join("summary.json"), json.as_bytes())
-        .map_err(io("cannot write summary.json"))?;
+        .map_err(io_error(out, "cannot write summary.json"))?;
     result.map(|_| summary).map_err(Error::from)
 }
 

@@ -4,10 +4,11 @@ use std::collections::BTreeSet;
 
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
+use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::contact::{self, Contact, ContactLaw};
-use crate::diagnostics::Health;
+use crate::diagnostics::{EnergyLimit, Health};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
@@ -19,7 +20,7 @@ use crate::step::{self, StepSet, Timings};
 use crate::stress::Stress;
 
 /// Simulated time and the time-step bookkeeping.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Clone, Debug, Serialize, Deserialize)]
 pub struct Clock {
     pub time: f64,
     pub dt: f64,
@@ -37,6 +38,8 @@ pub struct Clock {
     pub dt_max: f64,
     /// Largest CFL number used so far.
     pub cfl_max: f64,
+    /// A fixed step may exceed the CFL limit (the scene's `time.allow_unstable`).
+    pub allow_unstable: bool,
 }
 
 /// Body force per unit mass.
@@ -204,6 +207,10 @@ impl Simulation {
             dt_min: f64::INFINITY,
             dt_max: 0.0,
             cfl_max: 0.0,
+            allow_unstable: scene.time.allow_unstable,
+        });
+        world.insert_resource(EnergyLimit {
+            bound: scene.limits.max_kinetic_energy,
         });
         world.insert_resource(Gravity(scene.gravity));
         world.insert_resource(Boundaries(scene.walls));
@@ -221,6 +228,13 @@ impl Simulation {
         sim.schedule.run(&mut sim.world);
         sim.world.resource_mut::<Clock>().observing = false;
         Ok(sim)
+    }
+
+    /// Sends outputs to `dir` from now on (for a resumed run): the trajectory so far is
+    /// written to `trajectory.csv.part` and streamed from there.
+    pub fn write_to(&mut self, dir: &std::path::Path) -> std::io::Result<()> {
+        self.world.resource_mut::<RunDir>().0 = Some(dir.to_path_buf());
+        self.world.resource_mut::<Trajectory>().open(dir)
     }
 
     /// Takes one step; a fault (non-finite state, escaped point, write error) stops it.

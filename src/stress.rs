@@ -4,9 +4,10 @@
 //! (SCIENCE.md, notation). Tension is positive; the pressure is `p = -tr(T)/3`.
 
 use glam::{DMat2, DVec2};
+use serde::{Deserialize, Serialize};
 
 /// Symmetric Cauchy stress in plane strain (Pa, tension positive).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stress {
     pub xx: f64,
     pub yy: f64,

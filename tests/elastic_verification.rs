@@ -128,11 +128,12 @@ fn free_fall_follows_the_discrete_parabola_to_round_off() {
 
 /// A bar moving at -v0 meets its fixed end: a compression front travels at
 /// c = sqrt(M/rho). Arrival times at four stations (when the slab's mean velocity has
-/// risen through -v0/2) are fitted by a line; tolerance 3% (the issue's), against an
-/// expected error of a few tenths of a percent from the smeared front.
+/// risen through -v0/2) are fitted by a line; tolerance 3% (the issue's); measured 1.5% at
+/// this resolution (docs/ACCURACY.md). Linear runs with Musl: with Usl it blows up as the
+/// front reaches the free end (docs/numerics.md).
 #[test]
 fn pulse_crosses_the_bar_at_the_p_wave_speed() {
-    for integration in ["Linear", "CpdiFixed"] {
+    for (integration, update) in [("Linear", "Musl"), ("CpdiFixed", "Usl")] {
         let scene = scene(
             "elastic_bar_vibration",
             &[
@@ -142,6 +143,7 @@ fn pulse_crosses_the_bar_at_the_p_wave_speed() {
                 "domain.size=(1.2, 0.04)",
                 "bodies.bar.shape=Rectangle(min: (0.0, 0.0), max: (1.0, 0.04))",
                 &format!("integration={integration}"),
+                &format!("update={update}"),
             ],
         );
         let slope = front_speed(&scene, "bar", &[0.2, 0.4, 0.6, 0.8], 0.011, 1.0)

@@ -15,6 +15,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::world::EntityWorldMut;
 use glam::DMat2;
 use rayon::prelude::*;
+use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points};
@@ -40,7 +41,7 @@ pub trait Material: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     /// The name used in scene files, e.g. `LinearElastic`.
     const NAME: &'static str;
     /// Per-point state the update carries from step to step.
-    type History: Clone + Default + Debug + Send + Sync + 'static;
+    type History: Clone + Default + Debug + Send + Sync + Serialize + DeserializeOwned + 'static;
 
     /// Checks the parameters; the message says which one is wrong and what was expected.
     fn validate(&self) -> Result<(), String>;
@@ -93,6 +94,10 @@ pub trait MaterialSpec: Debug + Send + Sync {
     fn add_systems(&self, schedule: &mut Schedule);
     /// Bytes of history per point (for memory estimates).
     fn history_bytes(&self) -> usize;
+    /// The body's per-point history, encoded for a checkpoint.
+    fn save_history(&self, world: &World, entity: Entity) -> Vec<u8>;
+    /// Restores a history saved by [`MaterialSpec::save_history`].
+    fn load_history(&self, world: &mut World, entity: Entity, bytes: &[u8]) -> Result<(), String>;
 }
 
 crate::impl_named_spec!(MaterialSpec);
@@ -139,6 +144,27 @@ impl<M: Material> MaterialSpec for M {
     }
     fn history_bytes(&self) -> usize {
         std::mem::size_of::<M::History>()
+    }
+    fn save_history(&self, world: &World, entity: Entity) -> Vec<u8> {
+        let history = world
+            .get::<MaterialState<M>>(entity)
+            .map(|s| s.history.as_slice())
+            .unwrap_or(&[]);
+        bincode::serialize(history).expect("material history serialises")
+    }
+    fn load_history(&self, world: &mut World, entity: Entity, bytes: &[u8]) -> Result<(), String> {
+        let history: Vec<M::History> = bincode::deserialize(bytes)
+            .map_err(|e| format!("material history of {}: {e}", M::NAME))?;
+        match world.get_mut::<MaterialState<M>>(entity) {
+            Some(mut state) if state.history.len() == history.len() => {
+                state.history = history;
+                Ok(())
+            }
+            _ => Err(format!(
+                "the checkpoint's {} history does not fit the body",
+                M::NAME
+            )),
+        }
     }
 }
 

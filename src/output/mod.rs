@@ -32,6 +32,9 @@ pub trait Output: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     fn validate(&self) -> Result<(), String>;
     /// Adds the output's resources and its systems (in [`crate::step::StepSet::Output`]).
     fn install(&self, world: &mut World, schedule: &mut Schedule);
+    /// Re-aligns the output's own schedule with a run resumed at `time` (the state it
+    /// would have had then); by default nothing.
+    fn resume(&self, _world: &mut World, _time: f64) {}
 }
 
 /// An output as the scene and the simulation builder see it (object safe).
@@ -40,6 +43,7 @@ pub trait OutputSpec: Debug + Send + Sync {
     fn clone_spec(&self) -> Box<dyn OutputSpec>;
     fn validate(&self) -> Result<(), String>;
     fn install(&self, world: &mut World, schedule: &mut Schedule);
+    fn resume(&self, world: &mut World, time: f64);
 }
 
 crate::impl_named_spec!(OutputSpec);
@@ -56,6 +60,9 @@ impl<O: Output> OutputSpec for O {
     }
     fn install(&self, world: &mut World, schedule: &mut Schedule) {
         Output::install(self, world, schedule)
+    }
+    fn resume(&self, world: &mut World, time: f64) {
+        Output::resume(self, world, time)
     }
 }
 

@@ -51,6 +51,14 @@ impl Output for Snapshots {
         });
         schedule.add_systems(write_snapshot.in_set(StepSet::Output));
     }
+
+    /// Snapshots were written at 0, every, 2 every, ... up to `time`.
+    fn resume(&self, world: &mut World, time: f64) {
+        let done = (time / self.every + 1e-9).floor() as usize + 1;
+        let mut clock = world.resource_mut::<SnapshotClock>();
+        clock.count = done;
+        clock.next = done as f64 * self.every;
+    }
 }
 
 fn write_snapshot(

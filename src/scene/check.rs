@@ -8,6 +8,12 @@ use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
 use crate::integration::Integration;
+use glam::DVec2;
+
+/// Largest grid (cells) and body (points) a scene may ask for: beyond these the state
+/// alone needs several GiB per body, more than the machines this runs on are sized for.
+const MAX_CELLS: usize = 20_000_000;
+const MAX_POINTS: usize = 50_000_000;
 
 /// The 1-based line of the first occurrence of `needle` in `text`, if any.
 fn line_of(text: &str, needle: &str) -> Option<usize> {
@@ -50,6 +56,13 @@ impl Scene {
     /// Choices that are allowed but known to misbehave, one sentence each.
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
+        if let Some(cfl) = self.fixed_step_cfl()
+            && cfl > 1.0
+        {
+            w.push(format!(
+                "the fixed time step is above the CFL limit (c dt / h = {cfl:.3} > 1) and the run may diverge; allowed by time.allow_unstable"
+            ));
+        }
         if self.integration == Integration::Linear && self.update == StressUpdate::Usl {
             w.push(
                 "Linear integration with update Usl amplifies round-off at nodes of tiny mass and can blow up (docs/numerics.md); CpdiFixed or update: Musl avoid it"
@@ -57,6 +70,20 @@ impl Scene {
             );
         }
         w
+    }
+
+    /// The CFL number `dt (c + |v|) / h` of a `Fixed` step at the start, from each body's
+    /// p-wave speed and initial speed; `None` for a `Cfl` rule.
+    pub fn fixed_step_cfl(&self) -> Option<f64> {
+        let TimeStep::Fixed(dt) = self.time.step else {
+            return None;
+        };
+        let signal = self
+            .bodies
+            .iter()
+            .map(|b| b.material.wave_speed() + b.velocity.length())
+            .fold(0.0, f64::max);
+        Some(dt * signal / self.grid().cell_size)
     }
 
     /// Everything that can be wrong with a well-typed scene. `text` (possibly empty) is the
@@ -88,6 +115,15 @@ impl Scene {
                 format!(
                     "domain cells must be between 1 and 100000 along each axis, got ({}, {})",
                     d.cells.0, d.cells.1
+                ),
+            );
+        }
+        if d.cells.0 * d.cells.1 > MAX_CELLS {
+            return err(
+                "cells",
+                format!(
+                    "the grid has {} cells, more than the {MAX_CELLS} a body's nodal field may hold here",
+                    d.cells.0 * d.cells.1
                 ),
             );
         }
@@ -171,7 +207,38 @@ impl Scene {
         if self.bodies.is_empty() {
             return err("bodies", "the scene needs at least one body".to_string());
         }
-        self.check_bodies(text, origin)
+        self.check_bodies(text, origin)?;
+        if let Some(cfl) = self.fixed_step_cfl()
+            && cfl > 1.0
+            && !self.time.allow_unstable
+        {
+            let h = self.grid().cell_size;
+            let signal = cfl * h / self.fixed_dt();
+            return err(
+                "Fixed",
+                format!(
+                    "the fixed time step {:e} s is above the CFL limit: c dt / h = {cfl:.3} > 1 with c + |v| = {signal:.1} m/s and h = {h} m; the largest stable fixed step is {:.3e} s (use a smaller step, Cfl(C), or time.allow_unstable: true to run anyway)",
+                    self.fixed_dt(),
+                    h / signal
+                ),
+            );
+        }
+        if let Some(ke) = self.limits.max_kinetic_energy
+            && !(ke.is_finite() && ke > 0.0)
+        {
+            return err(
+                "max_kinetic_energy",
+                format!("limits.max_kinetic_energy must be a positive number (J/m), got {ke}"),
+            );
+        }
+        Ok(())
+    }
+
+    fn fixed_dt(&self) -> f64 {
+        match self.time.step {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Cfl(_) => f64::NAN,
+        }
     }
 
     fn check_bodies(&self, text: &str, origin: &str) -> Result<(), SceneError> {
@@ -237,6 +304,14 @@ impl Scene {
                     dmin.y,
                     dmax.x,
                     dmax.y
+                ));
+            }
+            let spacing = grid.cell_size / b.points_per_cell as f64;
+            let span = (hi.min(dmax) - lo.max(dmin)).max(DVec2::ZERO) / spacing;
+            if (span.x + 1.0) * (span.y + 1.0) > MAX_POINTS as f64 {
+                return err(format!(
+                    "it would hold about {:.2e} material points, more than the {MAX_POINTS} a body may have",
+                    span.x * span.y
                 ));
             }
             let lattice = fill(&*b.shape, &grid, b.points_per_cell);

@@ -12,7 +12,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use glam::DVec2;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::contact::Contact;
 use crate::error::SceneError;
@@ -54,6 +54,9 @@ pub struct Scene {
     #[serde(default = "default_flip")]
     pub flip: f64,
     pub bodies: Vec<BodySpec>,
+    /// Divergence bounds; see [`Limits`].
+    #[serde(default)]
+    pub limits: Limits,
     /// Extra outputs (e.g. `Snapshots(every: 0.01)`); `summary.json` and `trajectory.csv`
     /// are always written.
     #[serde(default)]
@@ -113,10 +116,25 @@ pub struct TimeSettings {
     pub step: TimeStep,
     /// Interval between rows of `trajectory.csv` (s).
     pub output_every: f64,
+    /// Run a `Fixed` step above the CFL limit anyway (with a warning) instead of refusing
+    /// the scene; default false. The command line's `--allow-unstable` sets it.
+    #[serde(default)]
+    pub allow_unstable: bool,
+}
+
+/// Bounds past which a run is declared diverging and stopped.
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limits {
+    /// Largest total kinetic energy (J per metre of thickness). Default: ten times the
+    /// kinetic plus potential energy after the first step, plus the kinetic energy of every
+    /// body moving at 1% of its p-wave speed (the energy of a 1% elastic strain).
+    #[serde(default)]
+    pub max_kinetic_energy: Option<f64>,
 }
 
 /// How the time step is chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum TimeStep {
     /// A fixed step (s).
     Fixed(f64),

@@ -29,7 +29,12 @@ enum Kind {
 struct Scanner<'a> {
     s: &'a [u8],
     i: usize,
+    /// Nesting depth, bounded so that no text can exhaust the stack.
+    depth: usize,
 }
+
+/// Deeper nesting than any scene needs (RON's own parser stops at a similar depth).
+const MAX_DEPTH: usize = 100;
 
 impl<'a> Scanner<'a> {
     fn peek(&self) -> Option<u8> {
@@ -112,6 +117,16 @@ impl<'a> Scanner<'a> {
     }
 
     fn value(&mut self) -> Result<Node, String> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return self.fail("values nested too deeply");
+        }
+        let node = self.value_inner();
+        self.depth -= 1;
+        node
+    }
+
+    fn value_inner(&mut self) -> Result<Node, String> {
         self.skip_ws();
         let start = self.i;
         let kind = match self.peek() {
@@ -292,6 +307,7 @@ pub fn set_in_text(text: &str, assignment: &str) -> Result<String, String> {
     let mut scanner = Scanner {
         s: text.as_bytes(),
         i: 0,
+        depth: 0,
     };
     let root = scanner.value()?;
     let value = value.trim();
@@ -331,6 +347,16 @@ mod tests {
     fn inserts_a_missing_field() {
         let t = set_in_text(TEXT, "bodies.ball.tracked=true").unwrap();
         assert!(t.contains("M(a: 2), tracked: true)"), "{t}");
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_crash() {
+        let text = format!("{}1{}", "(".repeat(100_000), ")".repeat(100_000));
+        assert!(
+            set_in_text(&text, "a=1")
+                .unwrap_err()
+                .contains("nested too deeply")
+        );
     }
 
     #[test]

@@ -186,6 +186,7 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
             prepare::advance_clock.run_if(stepping),
             crate::diagnostics::measure_bodies,
             crate::diagnostics::check_health,
+            crate::diagnostics::check_energy.run_if(stepping),
             prepare::decide_output,
         )
             .chain()

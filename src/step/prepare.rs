@@ -3,6 +3,8 @@
 use bevy_ecs::prelude::*;
 
 use crate::body::{Body, BodyState};
+use crate::diagnostics::Health;
+use crate::error::Fault;
 use crate::grid::{GridField, GridGeometry};
 use crate::scene::TimeStep;
 use crate::sim::Clock;
@@ -19,6 +21,7 @@ pub fn signal_speed<'a>(bodies: impl Iterator<Item = (&'a Body, &'a BodyState)>)
 pub fn choose_time_step(
     mut clock: ResMut<Clock>,
     grid: Res<GridGeometry>,
+    mut health: ResMut<Health>,
     bodies: Query<(&Body, &BodyState)>,
 ) {
     let h = grid.cell_size;
@@ -31,7 +34,24 @@ pub fn choose_time_step(
     };
     clock.dt_min = clock.dt_min.min(dt);
     clock.dt_max = clock.dt_max.max(dt);
-    clock.cfl_max = clock.cfl_max.max(dt * signal / h);
+    let cfl = dt * signal / h;
+    clock.cfl_max = clock.cfl_max.max(cfl);
+    // Only a fixed step can outgrow the limit (a CFL rule stays on it up to round-off).
+    let fixed = matches!(clock.rule, TimeStep::Fixed(_));
+    if fixed && cfl > 1.0 && !clock.allow_unstable && health.fault.is_none() {
+        let (body, fastest) = bodies
+            .iter()
+            .max_by(|a, b| a.1.max_speed.total_cmp(&b.1.max_speed))
+            .map(|(b, s)| (b.name.clone(), s.max_speed))
+            .unwrap_or_default();
+        health.fault = Some(Fault {
+            step: clock.step,
+            time: clock.time,
+            message: format!(
+                "the fixed time step {dt:e} s is now above the CFL limit (c dt / h = {cfl:.3} > 1): body \"{body}\" has a point moving at {fastest:.3e} m/s; use a smaller step or Cfl(C)"
+            ),
+        });
+    }
     // A remainder within a millionth of a step is folded into this step rather than left
     // as a sliver step of its own.
     clock.last_step = dt >= remaining * (1.0 - 1e-6);
