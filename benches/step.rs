@@ -1,29 +1,74 @@
-//! Criterion benchmark of whole steps on the benchmark scene (30 k points, 100 x 100 cells).
-//! Run: cargo bench --bench step -- --quick
+//! Criterion benchmarks of the step's heavy systems and of whole steps, on the benchmark
+//! scenes (30 k points, 100 x 100 cells). Run: cargo bench --bench step -- --quick
 
+use bevy_ecs::system::RunSystemOnce;
 use criterion::{Criterion, criterion_group, criterion_main};
+use regolith::contact::frictional;
+use regolith::integration::CpdiFixed;
+use regolith::material::granular::MuI;
+use regolith::material::update_stress;
+use regolith::sim::on_worker;
+use regolith::step::transfer::{grid_to_particle, particle_to_grid};
 use regolith::{Regolith, Scene, Simulation};
 
-fn scene(integration: &str) -> Scene {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench_elastic_block.ron");
-    let sets = vec![
-        format!("integration={integration}"),
-        "time.end=1.0".to_string(),
-    ];
+const PS1: &str = "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)";
+
+fn scene(name: &str, sets: &[&str]) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
+    let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    sets.push("time.end=1.0".to_string());
     Scene::load(&path, &sets, &Regolith::default().registries())
         .unwrap()
         .0
 }
 
-fn step(c: &mut Criterion) {
-    for integration in ["Linear", "CpdiFixed"] {
-        let mut sim = Simulation::new(&scene(integration));
-        c.bench_function(&format!("step_30k_points_{integration}"), |b| {
-            b.iter(|| sim.step().unwrap())
-        });
+fn systems(c: &mut Criterion) {
+    // The full model: granular bed, elastic intruder, CPDI, frictional contact.
+    let mut sim = Simulation::new(&scene("bench_contact", &[PS1]));
+    for _ in 0..3 {
+        sim.step().unwrap();
+    }
+    let world = &mut sim.world;
+    c.bench_function("p2g_cpdi_30k", |b| {
+        b.iter(|| {
+            on_worker(|| {
+                world
+                    .run_system_once(particle_to_grid::<CpdiFixed>)
+                    .unwrap()
+            })
+        })
+    });
+    c.bench_function("g2p_cpdi_usl_30k", |b| {
+        b.iter(|| {
+            on_worker(|| {
+                world
+                    .run_system_once(grid_to_particle::<CpdiFixed>)
+                    .unwrap()
+            })
+        })
+    });
+    c.bench_function("constitutive_mui_30k", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(update_stress::<MuI>).unwrap()))
+    });
+    c.bench_function("contact_frictional_100x100", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(frictional).unwrap()))
+    });
+}
+
+fn steps(c: &mut Criterion) {
+    for (label, name, sets) in [
+        (
+            "step_elastic_linear_30k",
+            "bench_elastic_block",
+            vec!["integration=Linear"],
+        ),
+        ("step_elastic_cpdi_30k", "bench_elastic_block", vec![]),
+        ("step_full_model_30k", "bench_contact", vec![PS1]),
+    ] {
+        let mut sim = Simulation::new(&scene(name, &sets));
+        c.bench_function(label, |b| b.iter(|| on_worker(|| sim.step().unwrap())));
     }
 }
 
-criterion_group!(benches, step);
+criterion_group!(benches, systems, steps);
 criterion_main!(benches);

@@ -17,7 +17,7 @@ use crate::grid::GridField;
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
 use crate::scene::{Scene, TimeStep};
-use crate::sim::{Clock, Simulation};
+use crate::sim::{Clock, Simulation, on_worker};
 use crate::step::StepSet;
 
 /// Where the scene came from, for the record.
@@ -28,11 +28,11 @@ pub struct Provenance<'a> {
 }
 
 /// Something told about each step (the command line draws a progress bar with it).
-pub trait Progress {
+pub trait Progress: Send {
     fn step(&mut self, clock: &Clock);
 }
 
-impl<F: FnMut(&Clock)> Progress for F {
+impl<F: FnMut(&Clock) + Send> Progress for F {
     fn step(&mut self, clock: &Clock) {
         self(clock)
     }
@@ -102,22 +102,23 @@ fn run_to_end(
     progress: &mut dyn Progress,
 ) -> Result<Summary, Error> {
     let started = Instant::now();
-    let mut result = Ok(());
-    while !sim.finished() {
-        if let Err(f) = sim.step() {
-            result = Err(f);
-            break;
+    let result = on_worker(|| -> Result<Result<(), Fault>, Error> {
+        while !sim.finished() {
+            if let Err(f) = sim.step() {
+                return Ok(Err(f));
+            }
+            progress.step(sim.clock());
+            if let Some(every) = checkpoints.0
+                && sim.clock().step.is_multiple_of(every)
+                && !sim.finished()
+            {
+                Checkpoint::capture(&mut sim, scene, from.file, from.overrides)
+                    .write(&out.join("checkpoint.bin"))
+                    .map_err(io_error(out, "cannot write checkpoint.bin"))?;
+            }
         }
-        progress.step(sim.clock());
-        if let Some(every) = checkpoints.0
-            && sim.clock().step.is_multiple_of(every)
-            && !sim.finished()
-        {
-            Checkpoint::capture(&mut sim, scene, from.file, from.overrides)
-                .write(&out.join("checkpoint.bin"))
-                .map_err(io_error(out, "cannot write checkpoint.bin"))?;
-        }
-    }
+        Ok(Ok(()))
+    })?;
     let wall = started.elapsed().as_secs_f64();
     sim.trajectory_mut()
         .close()

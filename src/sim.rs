@@ -15,8 +15,8 @@ use crate::grid::{GridField, GridGeometry};
 use crate::output::RunDir;
 use crate::output::trajectory::Trajectory;
 use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Walls};
-use crate::step::CellDilatation;
 use crate::step::{self, StepSet, Timings};
+use crate::step::{Bands, CellDilatation};
 use crate::stress::Stress;
 
 /// Simulated time and the time-step bookkeeping.
@@ -58,6 +58,18 @@ pub struct FlipRatio(pub f64);
 pub struct Simulation {
     pub world: World,
     schedule: Schedule,
+}
+
+/// Runs `f` on a thread of the current rayon pool. The step's parallel loops then push
+/// their jobs onto that worker's own deque, which keeps its capacity, and a step allocates
+/// nothing; launched from outside the pool every parallel loop goes through rayon's global
+/// injector, which allocates a block every 63 jobs (measured in tests/determinism.rs).
+pub fn on_worker<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    if rayon::current_thread_index().is_some() {
+        f()
+    } else {
+        rayon::join(f, || ()).0
+    }
 }
 
 /// Mass tolerance of a body's nodes: `1e-8 rho h^2` per unit thickness (SCIENCE.md 2, step 4).
@@ -169,6 +181,7 @@ impl Simulation {
                 PointStates::new(n),
                 field,
                 BodyState::default(),
+                Bands::default(),
             ));
             spec.material.attach(&mut entity, n);
             if scene.dilatation == Dilatation::CellAveraged {
@@ -262,12 +275,15 @@ impl Simulation {
     }
 
     /// Steps to the end time, calling `each` after every step.
-    pub fn run(&mut self, mut each: impl FnMut(&Clock)) -> Result<(), Fault> {
-        while !self.finished() {
-            self.step()?;
-            each(self.clock());
-        }
-        Ok(())
+    /// The loop runs on a rayon worker thread (see [`on_worker`]).
+    pub fn run(&mut self, mut each: impl FnMut(&Clock) + Send) -> Result<(), Fault> {
+        on_worker(|| {
+            while !self.finished() {
+                self.step()?;
+                each(self.clock());
+            }
+            Ok(())
+        })
     }
 
     pub fn clock(&self) -> &Clock {

@@ -32,7 +32,8 @@ proptest! {
         let towards = match reference { None => ga - gb, Some(0) => ga, _ => -gb };
         prop_assume!(towards.length() > 1e-6);
         let n = towards.normalize();
-        let dp = frictional_impulses(&[a, b], mu, reference, 1e-9);
+        let mut dp = [DVec2::ZERO; 2];
+        frictional_impulses(&[a, b], mu, reference, 1e-9, &mut dp);
         let scale = a.momentum.length() + b.momentum.length() + 1e-300;
         prop_assert!((dp[0] + dp[1]).length() <= 1e-12 * scale);
         let w = va - vb;

@@ -81,15 +81,14 @@ pub fn frictional_impulses(
     friction: f64,
     reference: Option<usize>,
     normal_tolerance: f64,
-) -> Vec<DVec2> {
+    out: &mut [DVec2],
+) {
     let mass: f64 = bodies.iter().map(|b| b.mass).sum();
     let momentum: DVec2 = bodies.iter().map(|b| b.momentum).sum();
     let gradient: DVec2 = bodies.iter().map(|b| b.mass_gradient).sum();
     let v_cm = momentum / mass;
-    bodies
-        .iter()
-        .enumerate()
-        .map(|(k, b)| {
+    for ((k, b), out) in bodies.iter().enumerate().zip(out.iter_mut()) {
+        *out = {
             // `sum m grad S_i(x_p)` points out of a body (from its points towards the node):
             // b's points towards the others, theirs towards b, so the difference is the
             // common normal from b into the others.
@@ -100,47 +99,74 @@ pub fn frictional_impulses(
             };
             let len = towards.length();
             if len <= normal_tolerance {
-                return DVec2::ZERO;
+                *out = DVec2::ZERO;
+                continue;
             }
             let n = towards / len;
             let dv = b.momentum / b.mass - v_cm;
             let approach = dv.dot(n);
             if approach <= 0.0 {
-                return DVec2::ZERO;
+                *out = DVec2::ZERO;
+                continue;
             }
             let tangential = dv - approach * n;
             let slip = tangential.length();
             let limit = friction * approach;
             let kept = if slip > limit { limit / slip } else { 1.0 };
             -b.mass * (approach * n + kept * tangential)
-        })
-        .collect()
+        };
+    }
+}
+
+/// Per-node sums and per-body copies the contact systems keep from step to step, so that a
+/// step allocates nothing once they have grown.
+#[derive(Default)]
+pub struct ContactScratch {
+    /// Per node: bodies above their mass tolerance, total mass, total momentum.
+    sharing: Vec<u8>,
+    mass: Vec<f64>,
+    momentum: Vec<DVec2>,
+    /// Per body and node (`body * nodes + node`): the state read and the impulse to apply.
+    state: Vec<NodeBody>,
+    present: Vec<bool>,
+    impulse: Vec<DVec2>,
+    named: Vec<bool>,
+    /// Per node, the bodies there (reused).
+    at_node: Vec<NodeBody>,
+    which: Vec<usize>,
+    out: Vec<DVec2>,
 }
 
 /// Adds the contact force that gives every body at a shared node the common velocity.
-pub fn no_slip(clock: Res<Clock>, mut fields: Query<&mut GridField>) {
+pub fn no_slip(
+    clock: Res<Clock>,
+    mut scratch: Local<ContactScratch>,
+    mut fields: Query<&mut GridField>,
+) {
     let dt = clock.dt;
-    let mut fields: Vec<Mut<GridField>> = fields.iter_mut().collect();
-    let nodes = fields.first().map_or(0, |f| f.mass.len());
-    for n in 0..nodes {
-        let mut sharing = 0;
-        let mut mass = 0.0;
-        let mut momentum = DVec2::ZERO;
-        for f in fields.iter() {
+    let s = &mut *scratch;
+    let nodes = fields.iter().next().map_or(0, |f| f.mass.len());
+    s.sharing.clear();
+    s.sharing.resize(nodes, 0);
+    s.mass.clear();
+    s.mass.resize(nodes, 0.0);
+    s.momentum.clear();
+    s.momentum.resize(nodes, DVec2::ZERO);
+    for f in fields.iter() {
+        for n in 0..nodes {
             if f.mass[n] > f.mass_tolerance {
-                sharing += 1;
-                mass += f.mass[n];
-                momentum += f.momentum[n];
+                s.sharing[n] = s.sharing[n].saturating_add(1);
+                s.mass[n] += f.mass[n];
+                s.momentum[n] += f.momentum[n];
             }
         }
-        if sharing < 2 {
-            continue;
-        }
-        let v_cm = momentum / mass;
-        for f in fields.iter_mut() {
-            if f.mass[n] > f.mass_tolerance {
+    }
+    for mut f in fields.iter_mut() {
+        for n in 0..nodes {
+            if s.sharing[n] >= 2 && f.mass[n] > f.mass_tolerance {
+                let v_cm = s.momentum[n] / s.mass[n];
                 let impulse = f.mass[n] * v_cm - f.momentum[n];
-                apply_impulse(f, n, impulse, dt);
+                apply_impulse(&mut f, n, impulse, dt);
             }
         }
     }
@@ -156,57 +182,72 @@ fn apply_impulse(f: &mut GridField, n: usize, impulse: DVec2, dt: f64) {
 }
 
 /// The frictional contact law, with walls applied again afterwards (a contact normal that
-/// is not parallel to a wall could otherwise push a wall node through it).
+/// is not parallel to a wall could otherwise push a wall node through it). Bodies are read
+/// into the scratch, impulses computed node by node, then applied body by body (the query
+/// visits bodies in the same order both times).
 pub fn frictional(
     clock: Res<Clock>,
     contact: Res<ContactLaw>,
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
+    mut scratch: Local<ContactScratch>,
     mut bodies: Query<(&Body, &mut GridField)>,
 ) {
     let Contact::Frictional { friction, normal } = &contact.0 else {
         return;
     };
-    let friction = *friction;
-    let dt = clock.dt;
-    let mut named = Vec::new();
-    let mut fields: Vec<Mut<GridField>> = Vec::new();
-    for (body, field) in bodies.iter_mut() {
-        named.push(matches!(normal, NormalRule::Body(n) if *n == body.name));
-        fields.push(field);
+    let (friction, dt) = (*friction, clock.dt);
+    let s = &mut *scratch;
+    let nodes = bodies.iter().next().map_or(0, |(_, f)| f.mass.len());
+    let count = bodies.iter().count();
+    s.state.clear();
+    s.present.clear();
+    s.named.clear();
+    for (body, f) in bodies.iter() {
+        s.named
+            .push(matches!(normal, NormalRule::Body(n) if *n == body.name));
+        for n in 0..nodes {
+            s.present.push(f.mass[n] > f.mass_tolerance);
+            s.state.push(NodeBody {
+                mass: f.mass[n],
+                momentum: f.momentum[n],
+                mass_gradient: f.mass_gradient[n],
+            });
+        }
     }
-    let nodes = fields.first().map_or(0, |f| f.mass.len());
-    let mut at_node = Vec::with_capacity(fields.len());
-    let mut which = Vec::with_capacity(fields.len());
+    s.impulse.clear();
+    s.impulse.resize(count * nodes, DVec2::ZERO);
     for n in 0..nodes {
-        at_node.clear();
-        which.clear();
-        for (b, f) in fields.iter().enumerate() {
-            if f.mass[n] > f.mass_tolerance {
-                at_node.push(NodeBody {
-                    mass: f.mass[n],
-                    momentum: f.momentum[n],
-                    mass_gradient: f.mass_gradient[n],
-                });
-                which.push(b);
+        s.at_node.clear();
+        s.which.clear();
+        for b in 0..count {
+            if s.present[b * nodes + n] {
+                s.at_node.push(s.state[b * nodes + n]);
+                s.which.push(b);
             }
         }
-        if at_node.len() < 2 {
+        if s.at_node.len() < 2 {
             continue;
         }
         // A normal is undefined when the mass gradients nearly cancel: below a millionth
         // of the typical gradient magnitude m / h at this node.
-        let scale: f64 = at_node.iter().map(|b| b.mass).sum::<f64>() / grid.cell_size;
-        let reference = which.iter().position(|&b| named[b]);
-        let impulses = frictional_impulses(&at_node, friction, reference, 1e-6 * scale);
-        for (&b, impulse) in which.iter().zip(impulses) {
-            if impulse != DVec2::ZERO {
-                apply_impulse(&mut fields[b], n, impulse, dt);
-            }
+        let scale: f64 = s.at_node.iter().map(|b| b.mass).sum::<f64>() / grid.cell_size;
+        let reference = s.which.iter().position(|&b| s.named[b]);
+        s.out.clear();
+        s.out.resize(s.at_node.len(), DVec2::ZERO);
+        frictional_impulses(&s.at_node, friction, reference, 1e-6 * scale, &mut s.out);
+        for (&b, &impulse) in s.which.iter().zip(s.out.iter()) {
+            s.impulse[b * nodes + n] = impulse;
         }
     }
-    for f in fields.iter_mut() {
-        apply_walls(&grid, &walls.0, f, Some(dt));
+    for (b, (_, mut f)) in bodies.iter_mut().enumerate() {
+        for n in 0..nodes {
+            let impulse = s.impulse[b * nodes + n];
+            if impulse != DVec2::ZERO {
+                apply_impulse(&mut f, n, impulse, dt);
+            }
+        }
+        apply_walls(&grid, &walls.0, &mut f, Some(dt));
     }
 }
 
@@ -231,17 +272,17 @@ mod tests {
         // A above (its outward normal at the node points down), moving up; B below, at rest.
         let a = body(1.0, DVec2::new(0.3, 1.0), DVec2::new(0.0, -2.0));
         let b = body(2.0, DVec2::ZERO, DVec2::new(0.0, 3.0));
-        assert_eq!(
-            frictional_impulses(&[a, b], 0.5, None, 1e-12),
-            vec![DVec2::ZERO; 2]
-        );
+        let mut dp = [DVec2::ONE; 2];
+        frictional_impulses(&[a, b], 0.5, None, 1e-12, &mut dp);
+        assert_eq!(dp, [DVec2::ZERO; 2]);
     }
 
     #[test]
     fn frictionless_contact_removes_only_the_normal_approach() {
         let a = body(1.0, DVec2::new(0.7, -1.0), DVec2::new(0.0, -2.0));
         let b = body(3.0, DVec2::ZERO, DVec2::new(0.0, 3.0));
-        let dp = frictional_impulses(&[a, b], 0.0, None, 1e-12);
+        let mut dp = [DVec2::ZERO; 2];
+        frictional_impulses(&[a, b], 0.0, None, 1e-12, &mut dp);
         assert!(dp[0].x.abs() < 1e-15 && dp[1].x.abs() < 1e-15);
         // A's normal velocity becomes the common one: v_cm,y = -1/4.
         assert!(((a.momentum.y + dp[0].y) / a.mass + 0.25).abs() < 1e-15);

@@ -199,7 +199,7 @@ impl<M: Material> Plugin for MaterialPlugin<M> {
 }
 
 /// The constitutive update of every body made of `M` (SCIENCE.md 2, step 7).
-fn update_stress<M: Material>(
+pub fn update_stress<M: Material>(
     clock: Res<Clock>,
     mut bodies: Query<(&mut Points, &mut PointStates, &mut MaterialState<M>)>,
 ) {

@@ -9,9 +9,10 @@
 //! parallelise inside with rayon. Everything up to the constitutive update is skipped while
 //! the clock is only observing (the t = 0 output before the first step).
 
+mod bands;
 mod grid_update;
 mod prepare;
-mod transfer;
+pub mod transfer;
 
 use std::time::{Duration, Instant};
 
@@ -22,6 +23,7 @@ use crate::integration::{CpdiFixed, Integration, Linear, Scheme};
 use crate::scene::{Dilatation, StressUpdate};
 use crate::sim::Clock;
 
+pub use bands::Bands;
 pub use grid_update::apply_walls;
 pub use prepare::signal_speed;
 pub use transfer::CellDilatation;

@@ -15,39 +15,54 @@ use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 
+use super::bands::{Bands, Shared};
 use super::grid_update::apply_walls;
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
-use crate::integration::{Scheme, Stencil};
+use crate::integration::{Scheme, Stencil, fast_floor};
 use crate::scene::Wall;
 use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the
 /// field keeps normals, `g_i = sum m grad S`.
+/// The scatter runs band by band in parallel without locks (see `bands`).
 pub fn particle_to_grid<S: Scheme>(
     grid: Res<GridGeometry>,
     gravity: Res<Gravity>,
-    mut bodies: Query<(&Points, &mut GridField)>,
+    mut bodies: Query<(&Points, &mut GridField, &mut Bands)>,
 ) {
     let g = gravity.0;
-    for (points, mut field) in &mut bodies {
+    let grid = &*grid;
+    for (points, mut field, mut bands) in &mut bodies {
         let field = &mut *field;
+        bands.rebuild(grid, &points.position);
         let normals = !field.mass_gradient.is_empty();
-        for p in 0..points.len() {
-            let stencil = Stencil::new::<S>(&grid, points.position[p], points.half_width[p]);
-            let m = points.mass[p];
-            let mv = m * points.velocity[p];
-            let vol = points.volume[p];
-            let t = points.stress[p];
-            for (n, w, grad) in stencil.iter() {
-                field.mass[n] += w * m;
-                field.momentum[n] += w * mv;
-                field.force[n] += w * m * g - vol * t.traction(grad);
-                if normals {
-                    field.mass_gradient[n] += m * grad;
+        let mass = Shared::new(&mut field.mass);
+        let momentum = Shared::new(&mut field.momentum);
+        let force = Shared::new(&mut field.force);
+        let gradient = Shared::new(&mut field.mass_gradient);
+        bands.for_each_phase(grid.periodic[1], |b| {
+            for &p in bands.points(b) {
+                let p = p as usize;
+                let stencil = Stencil::new::<S>(grid, points.position[p], points.half_width[p]);
+                let m = points.mass[p];
+                let mv = m * points.velocity[p];
+                let vol = points.volume[p];
+                let t = points.stress[p];
+                for (n, w, grad) in stencil.iter() {
+                    // SAFETY: stencil nodes are in bounds, and bands scattering at the same
+                    // time touch disjoint node rows (bands module).
+                    unsafe {
+                        mass.add_at(n, w * m);
+                        momentum.add_at(n, w * mv);
+                        force.add_at(n, w * m * g - vol * t.traction(grad));
+                        if normals {
+                            gradient.add_at(n, m * grad);
+                        }
+                    }
                 }
             }
-        }
+        });
     }
 }
 
@@ -196,15 +211,30 @@ impl CellDilatation {
         }
     }
 
-    /// Per-cell sums of the points' volumes and of `value(k)`.
-    fn sum(&mut self, grid: &GridGeometry, points: &Points, value: impl Fn(usize) -> f64) {
+    /// Per-cell sums of the points' volumes and of `value(k)`, band by band in parallel (a
+    /// cell lies in exactly one band, so bands never share a sum; `bands` must be current).
+    fn sum(
+        &mut self,
+        grid: &GridGeometry,
+        points: &Points,
+        bands: &Bands,
+        value: impl Fn(usize) -> f64 + Sync,
+    ) {
         self.volume.fill(0.0);
         self.weighted.fill(0.0);
-        for k in 0..points.len() {
-            let c = cell_of(grid, points.position[k]);
-            self.volume[c] += points.volume[k];
-            self.weighted[c] += value(k);
-        }
+        let volume = Shared::new(&mut self.volume);
+        let weighted = Shared::new(&mut self.weighted);
+        bands.for_each(|b| {
+            for &k in bands.points(b) {
+                let k = k as usize;
+                let c = cell_of(grid, points.position[k]);
+                // SAFETY: cell indices are in bounds; band b alone owns the cells of its rows.
+                unsafe {
+                    volume.add_at(c, points.volume[k]);
+                    weighted.add_at(c, value(k));
+                }
+            }
+        });
     }
 
     /// `sum value / sum V` of the cell holding `x`.
@@ -218,8 +248,8 @@ impl CellDilatation {
 #[inline]
 fn cell_of(grid: &GridGeometry, x: DVec2) -> usize {
     let rel = (x - grid.origin) / grid.cell_size;
-    let i = (rel.x.floor().max(0.0) as usize).min(grid.cells[0] - 1);
-    let j = (rel.y.floor().max(0.0) as usize).min(grid.cells[1] - 1);
+    let i = (fast_floor(rel.x).max(0.0) as usize).min(grid.cells[0] - 1);
+    let j = (fast_floor(rel.y).max(0.0) as usize).min(grid.cells[1] - 1);
     j * grid.cells[0] + i
 }
 
@@ -230,13 +260,14 @@ fn cell_of(grid: &GridGeometry, x: DVec2) -> usize {
 /// finite elements.
 pub fn average_dilatation(
     grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &mut CellDilatation)>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation, &Bands)>,
 ) {
     let grid = &*grid;
-    for (mut points, mut cells) in &mut bodies {
+    for (mut points, mut cells, bands) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        cells.sum(grid, points, |k| {
+        // The points have not moved since the scatter built `bands`.
+        cells.sum(grid, points, bands, |k| {
             let l = points.velocity_gradient[k];
             points.volume[k] * (l.x_axis.x + l.y_axis.y)
         });
@@ -272,13 +303,14 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
 /// compressed (docs/numerics.md).
 pub fn cell_density(
     grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &mut CellDilatation)>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation, &mut Bands)>,
 ) {
     let grid = &*grid;
-    for (mut points, mut cells) in &mut bodies {
+    for (mut points, mut cells, mut bands) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        cells.sum(grid, points, |k| points.mass[k]);
+        bands.rebuild(grid, &points.position);
+        cells.sum(grid, points, &bands, |k| points.mass[k]);
         points
             .position
             .par_iter()

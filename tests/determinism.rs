@@ -1,0 +1,115 @@
+//! The step is deterministic: the state after N steps is bitwise the same with 1 and 2
+//! threads (the parallel scatter never reorders a node's contributions), and no step after
+//! the first allocates on the heap.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::collections::hash_map::DefaultHasher;
+use std::hash::Hasher;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use regolith::{Scene, Simulation};
+
+/// Counts heap allocations (all threads).
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// The full model at a coarse resolution: a PS-1 bed, an elastic intruder, CPDI,
+/// frictional contact, cell-averaged dilatation.
+fn impact() -> Scene {
+    common::scene(
+        "bench_contact",
+        &[
+            "domain.cells=(40, 40)",
+            "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
+            "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)",
+        ],
+    )
+}
+
+fn state_hash(sim: &mut Simulation) -> u64 {
+    let mut h = DefaultHasher::new();
+    for name in ["bed", "disc"] {
+        let p = sim.points(name).unwrap();
+        for k in 0..p.len() {
+            for v in [
+                p.position[k].x,
+                p.position[k].y,
+                p.velocity[k].x,
+                p.velocity[k].y,
+                p.volume[k],
+            ] {
+                h.write_u64(v.to_bits());
+            }
+            for v in [
+                p.stress[k].xx,
+                p.stress[k].yy,
+                p.stress[k].xy,
+                p.stress[k].zz,
+            ] {
+                h.write_u64(v.to_bits());
+            }
+        }
+    }
+    h.finish()
+}
+
+fn run_with_threads(threads: usize, steps: usize) -> u64 {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut sim = Simulation::new(&impact());
+        for _ in 0..steps {
+            sim.step().unwrap();
+        }
+        state_hash(&mut sim)
+    })
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_state() {
+    let one = run_with_threads(1, 200);
+    let two = run_with_threads(2, 200);
+    assert_eq!(
+        one, two,
+        "the state after 200 steps depends on the thread count"
+    );
+}
+
+#[test]
+fn steps_after_the_first_do_not_allocate() {
+    // The path `Simulation::run` and `regolith run` take: the loop on a pool worker.
+    let during = regolith::sim::on_worker(|| {
+        let mut sim = Simulation::new(&impact());
+        // The first steps size every scratch buffer.
+        for _ in 0..3 {
+            sim.step().unwrap();
+        }
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for _ in 0..50 {
+            sim.step().unwrap();
+        }
+        ALLOCATIONS.load(Ordering::Relaxed) - before
+    });
+    assert_eq!(during, 0, "{during} heap allocations in 50 steps");
+}
