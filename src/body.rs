@@ -124,6 +124,8 @@ pub struct BodyState {
     pub kinetic_energy: f64,
     /// Largest point speed.
     pub max_speed: f64,
+    /// Points retired through an `Open` side (no mass left).
+    pub retired: usize,
 }
 
 impl BodyState {
@@ -134,6 +136,10 @@ impl BodyState {
         let mut momentum = DVec2::ZERO;
         for k in 0..points.len() {
             let m = points.mass[k];
+            if m == 0.0 {
+                s.retired += 1;
+                continue;
+            }
             let v = points.velocity[k];
             s.mass += m;
             moment += m * points.position[k];

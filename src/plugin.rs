@@ -18,6 +18,7 @@ use crate::registry::Registries;
 use crate::scene::Scene;
 use crate::shape::ShapePlugin;
 use crate::shape::builtin::{Disc, Polygon, Rectangle};
+use crate::shape::intruder::TippedIntruder;
 
 /// Something that registers scene items.
 pub trait Plugin {
@@ -35,6 +36,7 @@ impl Plugin for DefaultPlugins {
         ShapePlugin::<Rectangle>::default().build(r);
         ShapePlugin::<Disc>::default().build(r);
         ShapePlugin::<Polygon>::default().build(r);
+        ShapePlugin::<TippedIntruder>::default().build(r);
         OutputPlugin::<Snapshots>::default().build(r);
     }
 }

@@ -151,6 +151,7 @@ pub fn summarize(
             centre_of_mass: s.centre_of_mass.to_array(),
             velocity: s.velocity.to_array(),
             kinetic_energy: s.kinetic_energy,
+            retired_points: s.retired,
         })
         .collect();
     let particles: usize = bodies.iter().map(|b| b.points).sum();

@@ -141,7 +141,11 @@ impl Simulation {
             let lattice = fill(&*spec.shape, &grid, spec.points_per_cell);
             let n = lattice.positions.len();
             let density = spec.material.density();
-            let mass = density * lattice.spacing * lattice.spacing;
+            // With a known area (and the whole shape inside the domain, as checked) the
+            // points share the exact mass; otherwise each carries its lattice cell's.
+            let cell_area = lattice.spacing * lattice.spacing;
+            let area = spec.shape.area().unwrap_or(cell_area * n as f64);
+            let mass = density * area / n as f64;
             let stress = initial_stresses(spec, &lattice.positions, lattice.spacing, scene.gravity);
             let volume: Vec<f64> = stress
                 .iter()

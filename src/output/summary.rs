@@ -50,4 +50,6 @@ pub struct BodySummary {
     pub velocity: [f64; 2],
     /// Kinetic energy per unit thickness (J/m).
     pub kinetic_energy: f64,
+    /// Points that left through an `Open` side (their mass is no longer in `mass`).
+    pub retired_points: usize,
 }

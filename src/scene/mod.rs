@@ -157,6 +157,10 @@ pub struct Walls {
 pub enum Wall {
     /// No constraint: material leaving the domain stops the run.
     Free,
+    /// No constraint, and material crossing it leaves the simulation: its points are
+    /// retired (mass, velocity, stress set to zero, parked on the boundary) and counted in
+    /// `summary.json` (an open box top that a splash may leave).
+    Open,
     /// Frictionless: the normal velocity is zero, the tangential one free.
     Slip,
     /// Both velocity components are zero.

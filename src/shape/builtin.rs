@@ -29,6 +29,10 @@ impl Shape for Rectangle {
     fn bounds(&self) -> (DVec2, DVec2) {
         (self.min, self.max)
     }
+    fn area(&self) -> Option<f64> {
+        let s = self.max - self.min;
+        Some(s.x * s.y)
+    }
 }
 
 /// `Disc(centre: (x, y), radius: r)`.
@@ -54,6 +58,9 @@ impl Shape for Disc {
             self.centre - DVec2::splat(self.radius),
             self.centre + DVec2::splat(self.radius),
         )
+    }
+    fn area(&self) -> Option<f64> {
+        Some(std::f64::consts::PI * self.radius * self.radius)
     }
 }
 
@@ -133,6 +140,9 @@ impl Shape for Polygon {
             .iter()
             .fold(DVec2::NEG_INFINITY, |m, v| m.max(*v));
         (min, max)
+    }
+    fn area(&self) -> Option<f64> {
+        Some(self.signed_area().abs())
     }
 }
 

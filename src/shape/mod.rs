@@ -5,6 +5,7 @@
 //! (rectangle, disc, polygon) register through [`ShapePlugin`] exactly as a user's would.
 
 pub mod builtin;
+pub mod intruder;
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
@@ -25,6 +26,11 @@ pub trait Shape: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     fn contains(&self, p: DVec2) -> bool;
     /// Axis-aligned bounding box `(min, max)`.
     fn bounds(&self) -> (DVec2, DVec2);
+    /// The exact area, when known: the body's points then share `density x area` between
+    /// them, so its mass does not depend on how the lattice happens to cut the outline.
+    fn area(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// A shape as the scene and the body filler see it (object safe).
@@ -34,6 +40,7 @@ pub trait ShapeSpec: Debug + Send + Sync {
     fn validate(&self) -> Result<(), String>;
     fn contains(&self, p: DVec2) -> bool;
     fn bounds(&self) -> (DVec2, DVec2);
+    fn area(&self) -> Option<f64>;
 }
 
 crate::impl_named_spec!(ShapeSpec);
@@ -53,6 +60,9 @@ impl<S: Shape> ShapeSpec for S {
     }
     fn bounds(&self) -> (DVec2, DVec2) {
         Shape::bounds(self)
+    }
+    fn area(&self) -> Option<f64> {
+        Shape::area(self)
     }
 }
 

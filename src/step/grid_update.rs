@@ -53,7 +53,7 @@ pub fn update_grid(
 /// Which velocity components a wall removes: `(x, y)` masks.
 fn constrained(wall: Wall, normal_axis: usize) -> [bool; 2] {
     match wall {
-        Wall::Free | Wall::Periodic => [false, false],
+        Wall::Free | Wall::Open | Wall::Periodic => [false, false],
         Wall::NoSlip => [true, true],
         Wall::Slip => {
             let mut c = [false, false];

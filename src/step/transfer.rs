@@ -324,7 +324,9 @@ pub fn cell_density(
 /// the wall's fixed nodes and moving interior nodes can carry a point a fraction of a step
 /// past the wall, which the material cannot do. A point stopped at a wall loses its velocity
 /// into the wall (otherwise FLIP would keep it for ever, since the wall's nodes have no
-/// acceleration). Past a `Free` side a point leaves, and the health check stops the run.
+/// acceleration). A point crossing an `Open` side is retired: parked on the boundary with
+/// no mass, velocity or stress, and a negligible volume, so it no longer takes part. Past a
+/// `Free` side a point leaves, and the health check stops the run.
 pub fn advect_points(
     grid: Res<GridGeometry>,
     clock: Res<Clock>,
@@ -333,24 +335,22 @@ pub fn advect_points(
 ) {
     let (dt, grid) = (clock.dt, &*grid);
     let (lo, hi) = (grid.origin, grid.max());
-    let solid = |w: Wall| matches!(w, Wall::Slip | Wall::NoSlip);
     let w = walls.0;
+    let kept = |wall: Wall| matches!(wall, Wall::Slip | Wall::NoSlip | Wall::Open);
+    let bound = |wall: Wall, at: f64, far: f64| if kept(wall) { at } else { far };
     let min = DVec2::new(
-        if solid(w.left) {
-            lo.x
-        } else {
-            f64::NEG_INFINITY
-        },
-        if solid(w.bottom) {
-            lo.y
-        } else {
-            f64::NEG_INFINITY
-        },
+        bound(w.left, lo.x, f64::NEG_INFINITY),
+        bound(w.bottom, lo.y, f64::NEG_INFINITY),
     );
     let max = DVec2::new(
-        if solid(w.right) { hi.x } else { f64::INFINITY },
-        if solid(w.top) { hi.y } else { f64::INFINITY },
+        bound(w.right, hi.x, f64::INFINITY),
+        bound(w.top, hi.y, f64::INFINITY),
     );
+    // Per axis: whether leaving through the low / high side retires the point.
+    let open = [
+        [w.left == Wall::Open, w.right == Wall::Open],
+        [w.bottom == Wall::Open, w.top == Wall::Open],
+    ];
     for mut points in &mut bodies {
         let points = &mut *points;
         points
@@ -358,21 +358,36 @@ pub fn advect_points(
             .par_iter_mut()
             .zip(points.velocity.par_iter_mut())
             .zip(points.volume.par_iter_mut())
+            .zip(points.mass.par_iter_mut().zip(points.stress.par_iter_mut()))
             .zip(
                 points
                     .advection
                     .par_iter()
                     .zip(points.velocity_gradient.par_iter()),
             )
-            .for_each(|(((x, v), vol), (&adv, l))| {
+            .for_each(|((((x, v), vol), (m, t)), (&adv, l))| {
+                if *m == 0.0 {
+                    // Retired earlier: stays parked.
+                    *v = DVec2::ZERO;
+                    *t = crate::stress::Stress::ZERO;
+                    return;
+                }
                 let moved = grid.wrap(*x + dt * adv);
                 *x = moved.clamp(min, max);
+                *vol *= (dt * (l.x_axis.x + l.y_axis.y)).exp();
                 for a in 0..2 {
-                    if (moved[a] < min[a] && v[a] < 0.0) || (moved[a] > max[a] && v[a] > 0.0) {
+                    let (below, above) = (moved[a] < min[a], moved[a] > max[a]);
+                    if (below && open[a][0]) || (above && open[a][1]) {
+                        *m = 0.0;
+                        *v = DVec2::ZERO;
+                        *t = crate::stress::Stress::ZERO;
+                        *vol *= 1e-12;
+                        return;
+                    }
+                    if (below && v[a] < 0.0) || (above && v[a] > 0.0) {
                         v[a] = 0.0;
                     }
                 }
-                *vol *= (dt * (l.x_axis.x + l.y_axis.y)).exp();
             });
     }
 }
