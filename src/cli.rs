@@ -20,6 +20,7 @@ use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
 use crate::scene::{InitialStress, Scene, TimeStep};
 use crate::sim::{Clock, Simulation};
+use crate::sweep::{Sweep, run_sweep};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +54,17 @@ enum Command {
         /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
         #[arg(long)]
         allow_unstable: bool,
+    },
+    /// Run the cross product of a sweep file's parameter values (resumable), writing sweep.csv.
+    Sweep {
+        /// The RON sweep file.
+        sweep: PathBuf,
+        /// Output directory (default: out/<sweep name>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Runs at once (default: the sweep's `jobs`, else the number of cores).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
     },
     /// Continue a run from the checkpoint.bin in its output directory.
     Resume {
@@ -109,6 +121,9 @@ pub fn main_with(app: Regolith) -> ExitCode {
             quiet,
             checkpoint_every,
         } => resume(&registries, &dir, quiet, CheckpointEvery(checkpoint_every)),
+        Command::Sweep { sweep, out, jobs } => {
+            run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
+        }
         Command::Check {
             scene,
             sets,
@@ -189,6 +204,39 @@ fn run(
     let result = run_scene(&scene, &from, &out, checkpoints, &mut progress);
     bar.finish_and_clear();
     report(&result?, &out);
+    Ok(())
+}
+
+fn run_sweep_command(
+    registries: &Rc<Registries>,
+    path: &Path,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+) -> Result<(), Error> {
+    let sweep = Sweep::load(path)?;
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sweep.name));
+    let shared: Registries = (**registries).clone();
+    let runs = sweep.plan().len();
+    println!("{}: {runs} runs into {}", sweep.name, out.display());
+    let failed = run_sweep(
+        path,
+        &sweep,
+        &out,
+        jobs,
+        || Rc::new(shared.clone()),
+        |line: &str| println!("{line}"),
+    )?;
+    println!(
+        "{}: done, {failed} failed; table in {}",
+        sweep.name,
+        out.join("sweep.csv").display()
+    );
+    if failed > 0 {
+        return Err(Error::Scene(crate::error::SceneError::file(
+            &path.display().to_string(),
+            format!("{failed} of {runs} runs failed (see sweep.csv)"),
+        )));
+    }
     Ok(())
 }
 

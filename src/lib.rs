@@ -16,6 +16,7 @@ pub mod diagnostics;
 pub mod error;
 pub mod fill;
 pub mod grid;
+pub mod impact;
 pub mod integration;
 pub mod material;
 pub mod output;
@@ -27,6 +28,7 @@ pub mod shape;
 pub mod sim;
 pub mod step;
 pub mod stress;
+pub mod sweep;
 pub mod verify;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.

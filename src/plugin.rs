@@ -9,6 +9,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use crate::error::SceneError;
+use crate::impact::Impact;
 use crate::material::MaterialPlugin;
 use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
@@ -38,6 +39,7 @@ impl Plugin for DefaultPlugins {
         ShapePlugin::<Polygon>::default().build(r);
         ShapePlugin::<TippedIntruder>::default().build(r);
         OutputPlugin::<Snapshots>::default().build(r);
+        OutputPlugin::<Impact>::default().build(r);
     }
 }
 

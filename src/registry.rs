@@ -60,6 +60,14 @@ pub struct Catalog<T: ?Sized> {
     entries: BTreeMap<&'static str, Constructor<T>>,
 }
 
+impl<T: ?Sized> Clone for Catalog<T> {
+    fn clone(&self) -> Self {
+        Catalog {
+            entries: self.entries.clone(),
+        }
+    }
+}
+
 impl<T: ?Sized> Default for Catalog<T> {
     fn default() -> Self {
         Catalog {
@@ -102,7 +110,7 @@ where
 }
 
 /// Every catalogue the scene format consults.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Registries {
     pub materials: Catalog<dyn MaterialSpec>,
     pub shapes: Catalog<dyn ShapeSpec>,

@@ -14,6 +14,7 @@ use std::time::Instant;
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
+use crate::impact::{ImpactMetrics, ImpactWatch, analyse};
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
 use crate::scene::{Scene, TimeStep};
@@ -164,7 +165,9 @@ pub fn summarize(
         TimeStep::Fixed(dt) => ("fixed", dt),
         TimeStep::Cfl(_) => ("cfl", clock.dt_max),
     };
+    let impact = impact_metrics(sim, &bodies);
     Summary {
+        impact,
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),
         overrides: from.overrides.to_vec(),
@@ -196,6 +199,20 @@ pub fn summarize(
         timings_s,
         bodies,
     }
+}
+
+/// The impact measures of an `Impact` output, from the trajectory rows.
+fn impact_metrics(sim: &Simulation, bodies: &[BodySummary]) -> Option<ImpactMetrics> {
+    let watch = sim.world.get_resource::<ImpactWatch>()?;
+    let table = sim.trajectory();
+    let (y, vy) = (
+        table.column(&watch.body, "y")?,
+        table.column(&watch.body, "vy")?,
+    );
+    let y = table.series(y);
+    let contact = watch.contact_row(&y)?;
+    let mass = bodies.iter().find(|b| b.name == watch.body)?.mass;
+    analyse(&table.series(0), &y, &table.series(vy), contact, mass)
 }
 
 /// Rough memory use of a scene's state in bytes: points, material history and one nodal

@@ -4,6 +4,8 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use crate::impact::ImpactMetrics;
+
 /// The whole summary. Field names are a public interface: extend, do not rename.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -36,6 +38,9 @@ pub struct Summary {
     /// Wall time per step set (s).
     pub timings_s: BTreeMap<String, f64>,
     pub bodies: Vec<BodySummary>,
+    /// The paper's impact measures, when the scene has an `Impact` output and the body hit
+    /// its surface.
+    pub impact: Option<ImpactMetrics>,
 }
 
 /// One body's final state.

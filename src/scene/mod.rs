@@ -211,6 +211,12 @@ pub enum InitialStress {
     Lithostatic,
 }
 
+/// The RON dialect of regolith's files: optional values are written bare
+/// (`critical_density: 1011.2`, `jobs: 2`), not `Some(..)`.
+pub fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
 impl Scene {
     /// Parses RON text; `origin` names the file in messages.
     pub fn parse(
@@ -218,17 +224,15 @@ impl Scene {
         origin: &str,
         registries: &Rc<Registries>,
     ) -> Result<Scene, SceneError> {
-        // Optional parameters are written bare (`critical_density: 1011.2`), not `Some(..)`.
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let scene: Scene = with_registries(registries, || options.from_str(text)).map_err(|e| {
-            SceneError::at(
-                origin,
-                e.span.start.line,
-                e.span.start.col,
-                e.code.to_string(),
-            )
-        })?;
+        let scene: Scene =
+            with_registries(registries, || ron_options().from_str(text)).map_err(|e| {
+                SceneError::at(
+                    origin,
+                    e.span.start.line,
+                    e.span.start.col,
+                    e.code.to_string(),
+                )
+            })?;
         scene.check(text, origin)?;
         Ok(scene)
     }

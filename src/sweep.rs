@@ -1,0 +1,307 @@
+//! `regolith sweep SWEEP.ron`: the cross product of parameter values, several runs at once,
+//! resumable, one CSV row per run.
+//!
+//! ```ron
+//! Sweep(
+//!     name: "slope_speed",
+//!     scene: "../scenes/impact_tipped_coarse.ron",      // relative to the sweep file
+//!     set: ["time.end=0.3"],                            // overrides for every run
+//!     vary: [
+//!         (key: "bodies.intruder.shape.slope", values: ["0.5", "1.0"]),
+//!         (key: "bodies.intruder.velocity", values: ["(0.0, -2.0)", "(0.0, -3.55)"]),
+//!     ],
+//!     jobs: 2,                                          // runs at once; default: cores
+//! )
+//! ```
+//! Each run writes its own directory `run_NNNN/` (the usual outputs) under the sweep's
+//! output directory; each runs on one thread, as the paper's authors did for throughput. A
+//! run whose `summary.json` already says `completed` with the same overrides is skipped, so
+//! an interrupted sweep continues where it stopped. `sweep.csv` is rewritten atomically
+//! after every run.
+
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde::Deserialize;
+
+use crate::error::{Error, SceneError};
+use crate::output::write_atomic;
+use crate::registry::Registries;
+use crate::run::{CheckpointEvery, Provenance, run_scene};
+use crate::scene::Scene;
+
+/// A sweep file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sweep {
+    pub name: String,
+    /// The scene file, relative to the sweep file.
+    pub scene: String,
+    /// `key.path=value` overrides applied to every run.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// The parameters varied; runs are their cross product.
+    pub vary: Vec<Varied>,
+    /// Runs at once (default: the number of cores).
+    #[serde(default)]
+    pub jobs: Option<usize>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Varied {
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+/// One run of the sweep: its directory name and overrides.
+#[derive(Clone, Debug)]
+pub struct Planned {
+    pub dir: String,
+    pub values: Vec<String>,
+    pub sets: Vec<String>,
+}
+
+impl Sweep {
+    pub fn load(path: &Path) -> Result<Sweep, SceneError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::file(&origin, format!("cannot read the sweep: {e}")))?;
+        let sweep: Sweep = crate::scene::ron_options().from_str(&text).map_err(|e| {
+            SceneError::at(
+                &origin,
+                e.span.start.line,
+                e.span.start.col,
+                e.code.to_string(),
+            )
+        })?;
+        if sweep.vary.is_empty() || sweep.vary.iter().any(|v| v.values.is_empty()) {
+            return Err(SceneError::file(
+                &origin,
+                "vary needs at least one key with at least one value",
+            ));
+        }
+        if sweep.jobs == Some(0) {
+            return Err(SceneError::file(&origin, "jobs must be at least 1"));
+        }
+        Ok(sweep)
+    }
+
+    /// The runs, in order: the last key varies fastest.
+    pub fn plan(&self) -> Vec<Planned> {
+        let mut runs = vec![Vec::new()];
+        for v in &self.vary {
+            runs = runs
+                .into_iter()
+                .flat_map(|prefix| {
+                    v.values.iter().map(move |value| {
+                        let mut p = prefix.clone();
+                        p.push(value.clone());
+                        p
+                    })
+                })
+                .collect();
+        }
+        runs.into_iter()
+            .enumerate()
+            .map(|(i, values)| {
+                let mut sets = self.set.clone();
+                sets.extend(
+                    self.vary
+                        .iter()
+                        .zip(&values)
+                        .map(|(v, value)| format!("{}={value}", v.key)),
+                );
+                Planned {
+                    dir: format!("run_{:04}", i + 1),
+                    values,
+                    sets,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The run's summary if it completed with exactly these overrides.
+fn completed(dir: &Path, sets: &[String]) -> bool {
+    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
+        return false;
+    };
+    let Ok(summary) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return false;
+    };
+    let same = summary["overrides"].as_array().is_some_and(|o| {
+        o.iter()
+            .map(|v| v.as_str().unwrap_or(""))
+            .eq(sets.iter().map(String::as_str))
+    });
+    summary["status"] == "completed" && same
+}
+
+/// One CSV field, quoted when it holds a comma or a quote.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Rewrites `sweep.csv` from the runs' summaries (runs not yet done get `pending`).
+fn write_table(
+    sweep: &Sweep,
+    runs: &[Planned],
+    out: &Path,
+    errors: &[(usize, String)],
+) -> std::io::Result<()> {
+    let metrics = [
+        "final_depth",
+        "stopping_time",
+        "impact_energy",
+        "peak_deceleration",
+    ];
+    let mut csv = String::from("run");
+    for v in &sweep.vary {
+        csv.push(',');
+        csv.push_str(&field(&v.key));
+    }
+    csv.push_str(",status,steps,wall_s,particle_steps_per_s");
+    for m in metrics {
+        csv.push(',');
+        csv.push_str(m);
+    }
+    csv.push_str(",failure\n");
+    for (i, run) in runs.iter().enumerate() {
+        let summary: serde_json::Value =
+            std::fs::read_to_string(out.join(&run.dir).join("summary.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .filter(|s: &serde_json::Value| {
+                    completed(&out.join(&run.dir), &run.sets) || s["status"] == "failed"
+                })
+                .unwrap_or(serde_json::Value::Null);
+        let error = errors.iter().find(|(k, _)| *k == i).map(|(_, e)| e.clone());
+        let status = match (&error, summary["status"].as_str()) {
+            (Some(_), _) => "failed",
+            (None, Some(s)) => s,
+            (None, None) => "pending",
+        };
+        let mut row = vec![run.dir.clone()];
+        row.extend(run.values.iter().map(|v| field(v)));
+        row.push(status.to_string());
+        for key in ["steps", "wall_s", "particle_steps_per_s"] {
+            row.push(
+                summary[key]
+                    .as_f64()
+                    .map_or(String::new(), |v| v.to_string()),
+            );
+        }
+        for m in metrics {
+            row.push(
+                summary["impact"][m]
+                    .as_f64()
+                    .map_or(String::new(), |v| v.to_string()),
+            );
+        }
+        let failure = error
+            .or_else(|| summary["failure"].as_str().map(String::from))
+            .unwrap_or_default();
+        row.push(field(&failure));
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+    }
+    write_atomic(&out.join("sweep.csv"), csv.as_bytes())
+}
+
+/// Runs the sweep into `out`, `jobs` runs at once; reports each finished run to `report`.
+pub fn run_sweep(
+    sweep_path: &Path,
+    sweep: &Sweep,
+    out: &Path,
+    jobs: Option<usize>,
+    registries: impl Fn() -> Rc<Registries> + Sync,
+    report: impl Fn(&str) + Sync,
+) -> Result<usize, Error> {
+    let scene_path: PathBuf = sweep_path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(&sweep.scene);
+    let runs = sweep.plan();
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::io(format!("cannot create {}", out.display()), e))?;
+    let pending: Vec<usize> = (0..runs.len())
+        .filter(|&i| !completed(&out.join(&runs[i].dir), &runs[i].sets))
+        .collect();
+    let skipped = runs.len() - pending.len();
+    if skipped > 0 {
+        report(&format!(
+            "{skipped} of {} runs already completed, skipped",
+            runs.len()
+        ));
+    }
+    let errors = Mutex::new(Vec::new());
+    write_table(sweep, &runs, out, &[]).map_err(|e| Error::io("cannot write sweep.csv", e))?;
+    let next = AtomicUsize::new(0);
+    let jobs = jobs
+        .or(sweep.jobs)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(pending.len().max(1)) {
+            scope.spawn(|| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .build()
+                    .expect("a one-thread pool");
+                let registries = registries();
+                loop {
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(&i) = pending.get(k) else { break };
+                    let run = &runs[i];
+                    let dir = out.join(&run.dir);
+                    let result = Scene::load(&scene_path, &run.sets, &registries)
+                        .map_err(Error::from)
+                        .and_then(|(scene, text)| {
+                            let from = Provenance {
+                                file: &scene_path.display().to_string(),
+                                text: &text,
+                                overrides: &run.sets,
+                            };
+                            pool.install(|| {
+                                run_scene(
+                                    &scene,
+                                    &from,
+                                    &dir,
+                                    CheckpointEvery(None),
+                                    &mut |_: &crate::sim::Clock| {},
+                                )
+                            })
+                        });
+                    let mut errors = errors.lock().expect("no run panics while holding the lock");
+                    match result {
+                        Ok(_) => report(&format!(
+                            "{}: completed ({})",
+                            run.dir,
+                            run.values.join(", ")
+                        )),
+                        Err(e) => {
+                            report(&format!(
+                                "{}: failed ({}): {e}",
+                                run.dir,
+                                run.values.join(", ")
+                            ));
+                            errors.push((i, e.to_string()));
+                        }
+                    }
+                    if let Err(e) = write_table(sweep, &runs, out, &errors) {
+                        report(&format!("cannot write sweep.csv: {e}"));
+                    }
+                }
+            });
+        }
+    });
+    let failed = errors.into_inner().map(|e| e.len()).unwrap_or(0);
+    Ok(failed)
+}
