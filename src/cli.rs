@@ -1,5 +1,5 @@
-//! The command line: `regolith run` a scene, `check` it without running, or `resume` a run
-//! from its checkpoint.
+//! The command line: `regolith run` a scene, `check` it without running, `resume` a run
+//! from its checkpoint, or `sweep` a parameter cross product.
 //!
 //! Every error ends the program with a non-zero status and one line on stderr that says what
 //! and where; nothing a user types or writes in a scene may cause a panic. A plugin crate

@@ -354,11 +354,7 @@ impl Simulation {
         let h = self.grid().cell_size;
         let mut q = self.world.query::<(&Body, &BodyState)>();
         let signal = step::signal_speed(q.iter(&self.world));
-        let dt = match self.clock().rule {
-            TimeStep::Fixed(dt) => dt,
-            TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
-            TimeStep::Cfl(_) => self.clock().end,
-        };
+        let dt = self.clock().rule.dt(h, signal, self.clock().end);
         (dt, dt * signal / h)
     }
 }

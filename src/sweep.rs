@@ -124,20 +124,25 @@ impl Sweep {
     }
 }
 
-/// The run's summary if it completed with exactly these overrides.
-fn completed(dir: &Path, sets: &[String]) -> bool {
-    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
-        return false;
-    };
-    let Ok(summary) = serde_json::from_str::<serde_json::Value>(&text) else {
-        return false;
-    };
+/// A run directory's `summary.json`, if it holds one that parses.
+fn read_summary(dir: &Path) -> Option<serde_json::Value> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// Whether `summary` is of a completed run with exactly these overrides.
+fn is_completed(summary: &serde_json::Value, sets: &[String]) -> bool {
     let same = summary["overrides"].as_array().is_some_and(|o| {
         o.iter()
             .map(|v| v.as_str().unwrap_or(""))
             .eq(sets.iter().map(String::as_str))
     });
     summary["status"] == "completed" && same
+}
+
+/// Whether the run in `dir` completed with exactly these overrides.
+fn completed(dir: &Path, sets: &[String]) -> bool {
+    read_summary(dir).is_some_and(|s| is_completed(&s, sets))
 }
 
 /// One CSV field, quoted when it holds a comma or a quote.
@@ -174,14 +179,9 @@ fn write_table(
     }
     csv.push_str(",failure\n");
     for (i, run) in runs.iter().enumerate() {
-        let summary: serde_json::Value =
-            std::fs::read_to_string(out.join(&run.dir).join("summary.json"))
-                .ok()
-                .and_then(|t| serde_json::from_str(&t).ok())
-                .filter(|s: &serde_json::Value| {
-                    completed(&out.join(&run.dir), &run.sets) || s["status"] == "failed"
-                })
-                .unwrap_or(serde_json::Value::Null);
+        let summary = read_summary(&out.join(&run.dir))
+            .filter(|s| is_completed(s, &run.sets) || s["status"] == "failed")
+            .unwrap_or(serde_json::Value::Null);
         let error = errors.iter().find(|(k, _)| *k == i).map(|(_, e)| e.clone());
         let status = match (&error, summary["status"].as_str()) {
             (Some(_), _) => "failed",

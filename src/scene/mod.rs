@@ -142,6 +142,19 @@ pub enum TimeStep {
     Cfl(f64),
 }
 
+impl TimeStep {
+    /// The step the rule gives on cells of size `h` for the fastest signal `signal`
+    /// (`c + |v|`); `otherwise` when a CFL rule has no signal to go by (nothing moves and no
+    /// material has a wave speed).
+    pub fn dt(self, h: f64, signal: f64, otherwise: f64) -> f64 {
+        match self {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
+            TimeStep::Cfl(_) => otherwise,
+        }
+    }
+}
+
 /// The four sides of the domain.
 #[derive(Clone, Copy, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -27,11 +27,7 @@ pub fn choose_time_step(
     let h = grid.cell_size;
     let signal = signal_speed(bodies.iter());
     let remaining = clock.end - clock.time;
-    let mut dt = match clock.rule {
-        TimeStep::Fixed(dt) => dt,
-        TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
-        TimeStep::Cfl(_) => remaining,
-    };
+    let mut dt = clock.rule.dt(h, signal, remaining);
     clock.dt_min = clock.dt_min.min(dt);
     clock.dt_max = clock.dt_max.max(dt);
     let cfl = dt * signal / h;

@@ -1,8 +1,8 @@
 //! Particle-to-grid scatter and grid-to-particle gather (SCIENCE.md 2, steps 1 and 5-6).
 //!
 //! Each body scatters only to its own nodal field and gathers only from it; bodies meet
-//! through the Contact set. The gathers are parallel over points; the scatter is serial per
-//! body for now (a lock-free parallel scatter is the performance issue's work).
+//! through the Contact set. The gathers are parallel over points; the scatter is parallel
+//! over bands of cell rows without locks (`bands`).
 //!
 //! USL gathers velocity, acceleration and velocity gradient in one pass. MUSL splits it:
 //! the velocity pass updates `v_p` and keeps the advection velocity, the remap scatters the
