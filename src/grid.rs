@@ -84,6 +84,9 @@ pub struct GridField {
     pub mass_gradient: Vec<DVec2>,
     /// Nodes lighter than this carry no velocity (SCIENCE.md 2, step 4).
     pub mass_tolerance: f64,
+    /// Total force the other bodies exert on this one through contact this step (N per
+    /// metre of thickness); zero for a lone body.
+    pub contact_force: DVec2,
 }
 
 impl GridField {
@@ -100,6 +103,7 @@ impl GridField {
                 Vec::new()
             },
             mass_tolerance,
+            contact_force: DVec2::ZERO,
         }
     }
 
@@ -109,6 +113,7 @@ impl GridField {
         self.momentum.fill(DVec2::ZERO);
         self.force.fill(DVec2::ZERO);
         self.mass_gradient.fill(DVec2::ZERO);
+        self.contact_force = DVec2::ZERO;
     }
 
     /// Bytes held per node (for memory estimates).

@@ -199,7 +199,10 @@ fn colliding_discs_separate_without_sticking() {
 
 /// A stiff intruder placed on an elastic bed with frictional contact settles under gravity:
 /// it neither sinks into the bed (its base stays within one cell of the bed surface, the
-/// grid contact's resolution) nor bounces off; after 0.5 s its speed is below 1 cm/s.
+/// grid contact's resolution) nor bounces off; after 0.5 s its speed is below 1 cm/s. Over
+/// the last 0.2 s the contact force the bed exerts on it carries its weight on average (the
+/// instantaneous force rings with the elastic bodies), and at every step it is equal and
+/// opposite on the bed.
 #[test]
 fn intruder_settles_on_an_elastic_bed() {
     let scene = parse_scene(
@@ -222,7 +225,20 @@ fn intruder_settles_on_an_elastic_bed() {
     )
     .unwrap();
     let mut sim = Simulation::new(&scene);
-    sim.run(|_| {}).unwrap();
+    let (mut impulse, mut duration) = (DVec2::ZERO, 0.0);
+    while !sim.finished() {
+        sim.step().unwrap();
+        let on_intruder = sim.grid_field("intruder").unwrap().contact_force;
+        let on_bed = sim.grid_field("bed").unwrap().contact_force;
+        assert!(
+            (on_intruder + on_bed).length() <= 1e-9 * on_intruder.length().max(1.0),
+            "contact forces {on_intruder} and {on_bed} are not equal and opposite"
+        );
+        if sim.clock().time > 0.3 {
+            impulse += on_intruder * sim.clock().dt;
+            duration += sim.clock().dt;
+        }
+    }
     let base = sim
         .points("intruder")
         .unwrap()
@@ -238,6 +254,12 @@ fn intruder_settles_on_an_elastic_bed() {
         .map(|p| p.y)
         .fold(f64::MIN, f64::max);
     let speed = sim.bodies()[1].1.velocity.length();
+    let weight = sim.bodies()[1].1.mass * 9.81;
+    let mean = impulse / duration;
+    assert!(
+        (mean.y / weight - 1.0).abs() < 0.02 && mean.x.abs() < 0.02 * weight,
+        "mean contact force {mean} on an intruder of weight {weight:.3} N/m"
+    );
     assert!(
         (base - surface).abs() < 0.01,
         "intruder base {base:.4} vs bed surface {surface:.4}"

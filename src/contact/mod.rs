@@ -175,6 +175,7 @@ pub fn no_slip(
 /// Adds `impulse` to a body's momentum at node `n` as a force over the step.
 fn apply_impulse(f: &mut GridField, n: usize, impulse: DVec2, dt: f64) {
     let m = f.mass[n];
+    f.contact_force += impulse / dt;
     f.force[n] += impulse / dt;
     f.momentum[n] += impulse;
     f.velocity[n] = f.momentum[n] / m;
