@@ -14,7 +14,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::Regolith;
-use crate::error::Error;
+use crate::error::{Error, SceneError};
 use crate::output::summary::Summary;
 use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
@@ -54,6 +54,8 @@ enum Command {
         /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
         #[arg(long)]
         allow_unstable: bool,
+        #[command(flatten)]
+        record: RecordArgs,
     },
     /// Run the cross product of a sweep file's parameter values (resumable), writing sweep.csv.
     Sweep {
@@ -66,6 +68,23 @@ enum Command {
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         jobs: Option<u64>,
     },
+    /// Fit the Poncelet drag law m z'' = m g - f(z) - h(z) z'^2 across runs of one shape at
+    /// several speeds (the paper's section 4.2), writing depth,f,h,runs,residual as CSV.
+    Fit {
+        /// Run directories, or sweep output directories (all their runs).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The intruder (a tracked body).
+        #[arg(long, default_value = "intruder")]
+        body: String,
+        /// Depths to fit at, START:STOP:COUNT in metres (default: 20 depths from 5% to 90%
+        /// of the shallowest depth the runs reach while descending).
+        #[arg(long, value_name = "START:STOP:COUNT")]
+        depths: Option<String>,
+        /// Output CSV (default: poncelet.csv in the first directory).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Continue a run from the checkpoint.bin in its output directory.
     Resume {
         /// The run's output directory.
@@ -75,6 +94,8 @@ enum Command {
         /// Keep writing checkpoint.bin every N steps.
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         checkpoint_every: Option<u64>,
+        #[command(flatten)]
+        record: RecordArgs,
     },
     /// Validate a scene and print the resolved setup without running it.
     Check {
@@ -85,6 +106,91 @@ enum Command {
         #[arg(long)]
         allow_unstable: bool,
     },
+}
+
+/// The name of the output the recording flags add (registered by the Rerun plugin crate).
+pub const RECORDER: &str = "Rerun";
+
+/// Recording for the Rerun viewer. The flags become a `Rerun(..)` scene output, so a
+/// recording asked for on the command line and one listed in a scene are the same thing.
+#[derive(clap::Args, Debug, Default)]
+struct RecordArgs {
+    /// Record the run for the Rerun viewer into FILE (.rrd).
+    #[arg(long, value_name = "FILE")]
+    rrd: Option<PathBuf>,
+    /// Stream the recording to a Rerun viewer started from PATH (`rerun`).
+    #[arg(long)]
+    spawn: bool,
+    /// Record every N steps (default: at the scene's output interval, time.output_every).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    record_every: Option<u64>,
+    /// Colour the points by: pressure (default), plastic-strain-rate, inertial-number, phase,
+    /// speed or body.
+    #[arg(long, value_name = "FIELD")]
+    color: Option<String>,
+    /// Also record the grid: nodal velocities and masses.
+    #[arg(long)]
+    record_grid: bool,
+}
+
+impl RecordArgs {
+    /// The `Rerun(..)` output these flags stand for, as scene text; `None` without `--rrd`
+    /// or `--spawn`.
+    fn output_text(&self) -> Result<Option<String>, String> {
+        if self.rrd.is_none() && !self.spawn {
+            if self.record_every.is_some() || self.color.is_some() || self.record_grid {
+                return Err(
+                    "--record-every, --color and --record-grid need --rrd FILE or --spawn".into(),
+                );
+            }
+            return Ok(None);
+        }
+        let mut fields = Vec::new();
+        if let Some(file) = &self.rrd {
+            let file =
+                std::path::absolute(file).map_err(|e| format!("--rrd {}: {e}", file.display()))?;
+            fields.push(format!("file: {:?}", file.display().to_string()));
+        }
+        fields.push(format!("spawn: {}", self.spawn));
+        if let Some(n) = self.record_every {
+            fields.push(format!("every: {n}"));
+        }
+        if let Some(c) = &self.color {
+            fields.push(format!("color: {}", camel_case(c)));
+        }
+        fields.push(format!("grid: {}", self.record_grid));
+        Ok(Some(format!("{RECORDER}({})", fields.join(", "))))
+    }
+
+    /// Adds the recording to `scene`, or says why it cannot be made.
+    fn apply(&self, scene: &mut Scene, registries: &Rc<Registries>) -> Result<(), Error> {
+        let flags = |message: String| Error::Scene(SceneError::file("command line", message));
+        let Some(text) = self.output_text().map_err(flags)? else {
+            return Ok(());
+        };
+        if !registries.outputs.names().contains(&RECORDER) {
+            return Err(flags(
+                "this program was built without the Rerun recorder; use the `regolith` \
+                 command of the workspace (cli/), which includes it, or add \
+                 `regolith_rerun::RerunPlugin` to yours"
+                    .to_string(),
+            ));
+        }
+        scene.add_output(&text, "command line", registries)?;
+        Ok(())
+    }
+}
+
+/// `plastic-strain-rate` or `plastic_strain_rate` as the RON variant `PlasticStrainRate`.
+fn camel_case(name: &str) -> String {
+    name.split(['-', '_'])
+        .map(|w| {
+            let mut c = w.chars();
+            c.next()
+                .map(|f| f.to_uppercase().chain(c).collect::<String>())
+                .unwrap_or_default()
+        })
+        .collect()
 }
 
 /// `--allow-unstable` as the override it stands for.
@@ -108,6 +214,7 @@ pub fn main_with(app: Regolith) -> ExitCode {
             quiet,
             checkpoint_every,
             allow_unstable,
+            record,
         } => run(
             &registries,
             &scene,
@@ -115,15 +222,29 @@ pub fn main_with(app: Regolith) -> ExitCode {
             &with_flags(sets, allow_unstable),
             quiet,
             CheckpointEvery(checkpoint_every),
+            &record,
         ),
         Command::Resume {
             dir,
             quiet,
             checkpoint_every,
-        } => resume(&registries, &dir, quiet, CheckpointEvery(checkpoint_every)),
+            record,
+        } => resume(
+            &registries,
+            &dir,
+            quiet,
+            CheckpointEvery(checkpoint_every),
+            &record,
+        ),
         Command::Sweep { sweep, out, jobs } => {
             run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
         }
+        Command::Fit {
+            runs,
+            body,
+            depths,
+            out,
+        } => fit(&runs, &body, depths.as_deref(), out),
         Command::Check {
             scene,
             sets,
@@ -187,8 +308,10 @@ fn run(
     sets: &[String],
     quiet: bool,
     checkpoints: CheckpointEvery,
+    record: &RecordArgs,
 ) -> Result<(), Error> {
-    let (scene, text) = Scene::load(path, sets, registries)?;
+    let (mut scene, text) = Scene::load(path, sets, registries)?;
+    record.apply(&mut scene, registries)?;
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }
@@ -245,14 +368,78 @@ fn resume(
     dir: &Path,
     quiet: bool,
     checkpoints: CheckpointEvery,
+    record: &RecordArgs,
 ) -> Result<(), Error> {
     let bar = progress_bar(quiet);
     let mut last_draw = 0u64;
     let mut progress = |c: &Clock| draw(&bar, &mut last_draw, c);
-    let result = resume_run(registries, dir, checkpoints, &mut progress);
+    let extend = |scene: &mut Scene| record.apply(scene, registries);
+    let result = resume_run(registries, dir, checkpoints, extend, &mut progress);
     bar.finish_and_clear();
     report(&result?, dir);
     Ok(())
+}
+
+fn fit(
+    dirs: &[PathBuf],
+    body: &str,
+    depths: Option<&str>,
+    out: Option<PathBuf>,
+) -> Result<(), Error> {
+    use crate::poncelet::{default_depths, expand_dirs, fit, load_run, to_csv};
+    let fail = |m: String| Error::Scene(SceneError::file("regolith fit", m));
+    let dirs = expand_dirs(dirs).map_err(fail)?;
+    let runs = dirs
+        .iter()
+        .map(|d| load_run(d, body))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(fail)?;
+    if runs.len() < 2 {
+        return Err(fail(format!(
+            "the fit needs runs at two or more speeds, got {}",
+            runs.len()
+        )));
+    }
+    let depths = match depths {
+        Some(spec) => parse_depths(spec).map_err(|e| fail(format!("--depths {spec}: {e}")))?,
+        None => default_depths(&runs),
+    };
+    let points = fit(&runs, &depths);
+    let out = out.unwrap_or_else(|| dirs[0].join("poncelet.csv"));
+    crate::output::write_atomic(&out, to_csv(&points).as_bytes())
+        .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;
+    println!(
+        "{} runs, {} of {} depths fitted; table in {}",
+        runs.len(),
+        points.len(),
+        depths.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// `START:STOP:COUNT` as COUNT evenly spaced depths.
+fn parse_depths(spec: &str) -> Result<Vec<f64>, String> {
+    let parts: Vec<&str> = spec.split(':').collect();
+    let [a, b, n] = parts[..] else {
+        return Err("expected START:STOP:COUNT".into());
+    };
+    let num = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("`{s}` is not a number"))
+    };
+    let (a, b) = (num(a)?, num(b)?);
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{n}` is not a count"))?;
+    if !(a.is_finite() && b.is_finite() && a >= 0.0 && b > a && (1..=100_000).contains(&n)) {
+        return Err("need 0 <= START < STOP and 1 <= COUNT <= 100000".into());
+    }
+    Ok((0..n)
+        .map(|k| a + (b - a) * k as f64 / (n.max(2) - 1) as f64)
+        .collect())
 }
 
 fn check(registries: &Rc<Registries>, path: &Path, sets: &[String]) -> Result<(), Error> {

@@ -9,6 +9,7 @@ use std::path::Path;
 use std::rc::Rc;
 
 use crate::error::SceneError;
+use crate::front::PressureFront;
 use crate::impact::Impact;
 use crate::material::MaterialPlugin;
 use crate::material::elastic::LinearElastic;
@@ -40,6 +41,7 @@ impl Plugin for DefaultPlugins {
         ShapePlugin::<TippedIntruder>::default().build(r);
         OutputPlugin::<Snapshots>::default().build(r);
         OutputPlugin::<Impact>::default().build(r);
+        OutputPlugin::<PressureFront>::default().build(r);
     }
 }
 

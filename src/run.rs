@@ -67,16 +67,19 @@ pub fn run_scene(
 
 /// Continues the run in `out` from its `checkpoint.bin`, with the scene text it started
 /// from (`scene.ron`); the result is bitwise identical to a run never interrupted.
+/// `extend` may add outputs that do not change the state (the command line's recording).
 pub fn resume_run(
     registries: &std::rc::Rc<crate::registry::Registries>,
     out: &Path,
     checkpoints: CheckpointEvery,
+    extend: impl FnOnce(&mut Scene) -> Result<(), Error>,
     progress: &mut dyn Progress,
 ) -> Result<Summary, Error> {
     let scene_path = out.join("scene.ron");
     let text =
         std::fs::read_to_string(&scene_path).map_err(io_error(out, "cannot read scene.ron"))?;
-    let scene = Scene::parse(&text, &scene_path.display().to_string(), registries)?;
+    let mut scene = Scene::parse(&text, &scene_path.display().to_string(), registries)?;
+    extend(&mut scene)?;
     let checkpoint = Checkpoint::read(&out.join("checkpoint.bin"))
         .map_err(|e| Error::Scene(SceneError::file(&out.display().to_string(), e)))?;
     let (file, overrides) = (checkpoint.scene_file.clone(), checkpoint.overrides.clone());
@@ -166,8 +169,13 @@ pub fn summarize(
         TimeStep::Cfl(_) => ("cfl", clock.dt_max),
     };
     let impact = impact_metrics(sim, &bodies);
+    let pressure_front = sim
+        .world
+        .get_resource::<crate::front::PressureRecord>()
+        .and_then(|r| r.front());
     Summary {
         impact,
+        pressure_front,
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),
         overrides: from.overrides.to_vec(),
@@ -189,6 +197,7 @@ pub fn summarize(
         particles,
         cells: grid.cells,
         cell_size: grid.cell_size,
+        gravity: scene.gravity.to_array(),
         threads: rayon::current_num_threads(),
         wall_s,
         particle_steps_per_s: if wall_s > 0.0 {

@@ -7,6 +7,7 @@
 use std::f64::consts::FRAC_PI_2;
 
 use crate::error::Fault;
+use crate::linefit::line_fit;
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
@@ -93,16 +94,12 @@ pub fn front_speed(
     if arrival.iter().any(|a| !a.is_finite()) {
         return Ok(None);
     }
-    let n = stations.len() as f64;
-    let mx = stations.iter().sum::<f64>() / n;
-    let mt = arrival.iter().sum::<f64>() / n;
-    let sxt: f64 = stations
+    let points: Vec<(f64, f64)> = arrival
         .iter()
-        .zip(&arrival)
-        .map(|(x, t)| (x - mx) * (t - mt))
-        .sum();
-    let stt: f64 = arrival.iter().map(|t| (t - mt) * (t - mt)).sum();
-    Ok(Some(sxt / stt))
+        .copied()
+        .zip(stations.iter().copied())
+        .collect();
+    Ok(line_fit(&points).map(|(_, speed)| speed))
 }
 
 /// Largest stress component magnitude seen on any point of `body` over the run.

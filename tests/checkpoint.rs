@@ -2,8 +2,6 @@
 
 mod common;
 
-use std::process::Command;
-
 use regolith::checkpoint::Checkpoint;
 use regolith::plugin::parse_scene;
 use regolith::{Scene, Simulation};
@@ -107,48 +105,4 @@ fn a_checkpoint_of_another_scene_is_refused() {
     std::fs::write(&path, b"garbage").unwrap();
     let err = Checkpoint::read(&path).err().expect("garbage is refused");
     assert!(err.contains("not a regolith checkpoint"), "{err}");
-}
-
-/// The command line: a run with checkpoints, resumed from its last one, ends with the same
-/// summary bodies and trajectory as a run without.
-#[test]
-fn regolith_resume_finishes_a_run_identically() {
-    let bin = env!("CARGO_BIN_EXE_regolith");
-    let dir = tempfile::tempdir().unwrap();
-    let scene = common::scene_path("contact_incline");
-    let run = |out: &str, extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            scene.to_str().unwrap(),
-            "--quiet",
-            "--set",
-            "time.end=0.02",
-            "--out",
-        ];
-        let out = dir.path().join(out);
-        args.push(out.to_str().unwrap());
-        args.extend_from_slice(extra);
-        let o = Command::new(bin).args(&args).output().unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        out
-    };
-    let plain = run("plain", &[]);
-    let checked = run("checked", &["--checkpoint-every", "100"]);
-    assert!(checked.join("checkpoint.bin").exists());
-    let o = Command::new(bin)
-        .args(["resume", checked.to_str().unwrap(), "--quiet"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let body = |d: &std::path::Path| {
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap())
-                .unwrap();
-        (s["bodies"].clone(), s["steps"].clone())
-    };
-    assert_eq!(body(&plain), body(&checked));
-    assert_eq!(
-        std::fs::read_to_string(plain.join("trajectory.csv")).unwrap(),
-        std::fs::read_to_string(checked.join("trajectory.csv")).unwrap()
-    );
 }

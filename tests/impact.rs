@@ -8,13 +8,15 @@ use regolith::Simulation;
 /// Final depth (centre-of-mass displacement from the start, where the tip touches the
 /// surface) and the intruder's final speed.
 fn impact(speed: f64) -> (f64, f64) {
-    let scene = common::scene(
-        "impact_tipped_coarse",
-        &[&format!("bodies.intruder.velocity=(0.0, -{speed})")],
-    );
+    impact_with(&[&format!("bodies.intruder.velocity=(0.0, -{speed})")])
+}
+
+/// As [`impact`], for the coarse scene with `--set` overrides.
+fn impact_with(sets: &[&str]) -> (f64, f64) {
+    let scene = common::scene("impact_tipped_coarse", sets);
     let mut sim = Simulation::new(&scene);
     sim.run(|_| {})
-        .unwrap_or_else(|e| panic!("impact at {speed} m/s: {e}"));
+        .unwrap_or_else(|e| panic!("impact with {sets:?}: {e}"));
     let tr = sim.trajectory();
     let y = tr.series(tr.column("intruder", "y").unwrap());
     let v = sim.bodies()[1].1.velocity.length();
@@ -37,4 +39,33 @@ fn faster_impacts_go_deeper_and_stop() {
         v_slow < 0.05 && v_fast < 0.05,
         "still moving: {v_slow} and {v_fast} m/s"
     );
+}
+
+/// At equal impact energy (same mass, same speed) a sharper tip goes deeper (the paper's
+/// Fig. 3: depth grows with the tip slope s): the flat-nosed s = 0 against s = 3.
+#[test]
+fn a_sharper_tip_goes_deeper_at_equal_energy() {
+    let (flat, _) = impact_with(&["bodies.intruder.shape.slope=0.0"]);
+    let (sharp, _) = impact_with(&["bodies.intruder.shape.slope=3.0"]);
+    assert!(
+        sharp > flat * 1.05,
+        "depth {sharp:.4} m for s = 3 vs {flat:.4} m for s = 0"
+    );
+}
+
+/// The rate-independent bed (appendix A: Drucker-Prager, mu_2 = mu_s) is weaker than mu(I),
+/// whose friction grows with the shear rate, so the intruder goes deeper into it.
+#[test]
+fn the_rate_independent_bed_lets_the_intruder_deeper() {
+    let (mu_i, _) = impact(4.5);
+    let (rate_independent, v) = impact_with(&[
+        "bodies.intruder.velocity=(0.0, -4.5)",
+        "bodies.bed.material=DruckerPrager(youngs_modulus: 2.0e7, poisson_ratio: 0.45, \
+         grain_density: 1280.0, packing_fraction: 0.79, mu_s: 0.320)",
+    ]);
+    assert!(
+        rate_independent > mu_i * 1.02,
+        "depth {rate_independent:.4} m rate-independent vs {mu_i:.4} m with mu(I)"
+    );
+    assert!(v < 0.05, "the intruder still moves at {v} m/s");
 }

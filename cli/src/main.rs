@@ -1,5 +1,5 @@
-//! The `regolith` command with the built-in plugins (see `regolith::cli`).
+//! The `regolith` command: the built-in plugins and the Rerun recorder (see `regolith::cli`).
 
 fn main() -> std::process::ExitCode {
-    regolith::cli::main_with(regolith::Regolith::default())
+    regolith::cli::main_with(regolith::Regolith::default().add_plugin(regolith_rerun::RerunPlugin))
 }

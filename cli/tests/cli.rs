@@ -1,11 +1,14 @@
 //! The `regolith` command as a user scripts it: outputs, exit codes, one-line errors.
 
-mod common;
-
 use std::path::Path;
 use std::process::{Command, Output};
 
-use common::scene_path;
+/// Path of a shipped scene (the scenes live at the workspace root).
+fn scene_path(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(format!("{name}.ron"))
+}
 
 fn regolith(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_regolith"))
@@ -146,4 +149,117 @@ fn user_errors_are_one_line_without_panic() {
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
         assert!(!err.contains("panicked"));
     }
+}
+
+/// The command line: a run with checkpoints, resumed from its last one, ends with the same
+/// summary bodies and trajectory as a run without.
+#[test]
+fn regolith_resume_finishes_a_run_identically() {
+    let bin = env!("CARGO_BIN_EXE_regolith");
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_path("contact_incline");
+    let run = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "time.end=0.02",
+            "--out",
+        ];
+        let out = dir.path().join(out);
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let o = Command::new(bin).args(&args).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let plain = run("plain", &[]);
+    let checked = run("checked", &["--checkpoint-every", "100"]);
+    assert!(checked.join("checkpoint.bin").exists());
+    let o = Command::new(bin)
+        .args(["resume", checked.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let body = |d: &std::path::Path| {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap())
+                .unwrap();
+        (s["bodies"].clone(), s["steps"].clone())
+    };
+    assert_eq!(body(&plain), body(&checked));
+    assert_eq!(
+        std::fs::read_to_string(plain.join("trajectory.csv")).unwrap(),
+        std::fs::read_to_string(checked.join("trajectory.csv")).unwrap()
+    );
+}
+
+/// `--rrd` records with one flag: the file is a valid recording holding every body's points.
+#[test]
+fn run_records_for_rerun_with_one_flag() {
+    use regolith_rerun::rerun::{ChunkStore, ChunkStoreConfig, StoreKind};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let rrd = dir.path().join("impact.rrd");
+    let scene = scene_path("impact_tipped_coarse");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "time.end=0.005",
+        "--out",
+        out.to_str().unwrap(),
+        "--rrd",
+        rrd.to_str().unwrap(),
+        "--color",
+        "plastic-strain-rate",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut file = std::fs::File::open(&rrd).unwrap();
+    let stores = ChunkStore::from_rrd_reader(&ChunkStoreConfig::DEFAULT, &mut file).unwrap();
+    let store = stores
+        .iter()
+        .find(|(id, _)| id.kind() == StoreKind::Recording)
+        .map(|(_, s)| s)
+        .expect("a recording");
+    let paths: Vec<String> = store
+        .iter_physical_chunks()
+        .map(|c| c.entity_path().to_string())
+        .collect();
+    for p in [
+        "/world/bed/points",
+        "/world/intruder/points",
+        "/plots/intruder/depth",
+    ] {
+        assert!(paths.iter().any(|q| q == p), "{p} not recorded");
+    }
+    // Nothing else changes: the run's own outputs are written as without recording.
+    assert!(out.join("summary.json").exists() && out.join("trajectory.csv").exists());
+}
+
+#[test]
+fn recording_options_without_a_recording_are_an_error() {
+    let scene = scene_path("impact_tipped_coarse");
+    let o = regolith(&["run", scene.to_str().unwrap(), "--color", "phase"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("need --rrd FILE or --spawn"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("x.rrd");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--rrd",
+        rrd.to_str().unwrap(),
+        "--color",
+        "colour-of-money",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("ColourOfMoney") && err.lines().count() == 1,
+        "{err}"
+    );
 }

@@ -5,7 +5,7 @@ use std::process::Command;
 #[test]
 fn a_sweep_runs_the_cross_product_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
-    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let sweep = dir.path().join("s.ron");
     std::fs::write(
         &sweep,

@@ -32,6 +32,8 @@ pub struct Summary {
     pub particles: usize,
     pub cells: [usize; 2],
     pub cell_size: f64,
+    /// Body force per unit mass (m/s^2).
+    pub gravity: [f64; 2],
     pub threads: usize,
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
@@ -41,6 +43,8 @@ pub struct Summary {
     /// The paper's impact measures, when the scene has an `Impact` output and the body hit
     /// its surface.
     pub impact: Option<ImpactMetrics>,
+    /// The pressure front's speed, when the scene asks for `PressureFront(..)`.
+    pub pressure_front: Option<crate::front::FrontMetrics>,
 }
 
 /// One body's final state.

@@ -35,6 +35,11 @@ impl Shape for Ellipse {
     fn bounds(&self) -> (DVec2, DVec2) {
         (self.centre - self.semi_axes, self.centre + self.semi_axes)
     }
+
+    /// `pi a b`: the body's mass is then exact, whatever the lattice.
+    fn area(&self) -> Option<f64> {
+        Some(std::f64::consts::PI * self.semi_axes.x * self.semi_axes.y)
+    }
 }
 
 /// Adds the `Ellipse` shape.
