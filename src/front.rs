@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, Points};
 use crate::linefit::line_fit;
-use crate::output::{Output, RunDir, write_atomic};
+use crate::output::{Interval, Output, OutputFaults, RunDir, write_or_fault};
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -59,7 +59,7 @@ pub struct FrontMetrics {
 #[derive(Resource, Clone, Debug)]
 pub struct PressureRecord {
     pub spec: PressureFront,
-    next: f64,
+    interval: Interval,
     /// Each point's pressure at t = 0 (taken at the first record).
     initial: Vec<f64>,
     pub times: Vec<f64>,
@@ -154,7 +154,7 @@ impl Output for PressureFront {
     fn install(&self, world: &mut World, schedule: &mut Schedule) {
         world.insert_resource(PressureRecord {
             spec: self.clone(),
-            next: 0.0,
+            interval: Interval::new(self.every),
             initial: Vec::new(),
             times: Vec::new(),
             rows: Vec::new(),
@@ -167,15 +167,11 @@ fn record_pressure(
     clock: Res<Clock>,
     dir: Res<RunDir>,
     mut record: ResMut<PressureRecord>,
-    mut health: ResMut<crate::diagnostics::Health>,
+    faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points)>,
 ) {
-    let eps = 1e-9 * record.spec.every;
-    if !(clock.observing || clock.last_step || clock.time >= record.next - eps) {
+    if !record.interval.due(&clock) {
         return;
-    }
-    while record.next <= clock.time + eps {
-        record.next += record.spec.every;
     }
     let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == record.spec.body) else {
         return;
@@ -209,14 +205,13 @@ fn record_pressure(
     record.times.push(clock.time);
     record.rows.push(row);
     if let Some(dir) = &dir.0 {
-        let path = dir.join("pressure_front.csv");
-        if let Err(e) = write_atomic(&path, record.csv().as_bytes()) {
-            health.fault.get_or_insert(crate::error::Fault {
-                step: clock.step,
-                time: clock.time,
-                message: format!("cannot write {}: {e}", path.display()),
-            });
-        }
+        let csv = record.csv();
+        write_or_fault(
+            &dir.join("pressure_front.csv"),
+            csv.as_bytes(),
+            &clock,
+            &faults,
+        );
     }
 }
 

@@ -15,6 +15,8 @@ pub mod contact;
 pub mod diagnostics;
 pub mod error;
 pub mod fill;
+pub mod flow_field;
+pub mod free_surface;
 pub mod front;
 pub mod grid;
 pub mod impact;

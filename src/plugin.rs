@@ -9,6 +9,8 @@ use std::path::Path;
 use std::rc::Rc;
 
 use crate::error::SceneError;
+use crate::flow_field::FlowField;
+use crate::free_surface::FreeSurface;
 use crate::front::PressureFront;
 use crate::impact::Impact;
 use crate::material::MaterialPlugin;
@@ -42,6 +44,8 @@ impl Plugin for DefaultPlugins {
         OutputPlugin::<Snapshots>::default().build(r);
         OutputPlugin::<Impact>::default().build(r);
         OutputPlugin::<PressureFront>::default().build(r);
+        OutputPlugin::<FlowField>::default().build(r);
+        OutputPlugin::<FreeSurface>::default().build(r);
     }
 }
 

@@ -12,8 +12,8 @@ use crate::diagnostics::{EnergyLimit, Health};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
-use crate::output::RunDir;
 use crate::output::trajectory::Trajectory;
+use crate::output::{OutputFaults, RunDir};
 use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Walls};
 use crate::step::{self, StepSet, Timings};
 use crate::step::{Bands, CellDilatation};
@@ -233,6 +233,7 @@ impl Simulation {
         world.insert_resource(Boundaries(scene.walls));
         world.insert_resource(FlipRatio(scene.flip));
         world.insert_resource(Health::default());
+        world.insert_resource(OutputFaults::default());
         world.insert_resource(Timings::default());
         let mut trajectory = Trajectory::new(&tracked);
         if let Some(dir) = dir {
@@ -258,6 +259,9 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), Fault> {
         self.world.resource_mut::<Timings>().restart();
         self.schedule.run(&mut self.world);
+        self.world.resource_scope(|world, mut health: Mut<Health>| {
+            world.resource::<OutputFaults>().drain_into(&mut health)
+        });
         if let Some(f) = &self.world.resource::<Health>().fault {
             return Err(f.clone());
         }

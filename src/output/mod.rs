@@ -14,12 +14,16 @@ use std::fmt::Debug;
 use std::io::Write;
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use bevy_ecs::prelude::*;
 use serde::de::DeserializeOwned;
 
+use crate::diagnostics::Health;
+use crate::error::Fault;
 use crate::plugin::Plugin;
 use crate::registry::{IntoSpec, Registries, construct};
+use crate::sim::Clock;
 
 /// The directory a run writes into, if it writes files at all (tests run without one).
 #[derive(Resource, Clone, Debug, Default)]
@@ -86,6 +90,128 @@ impl<O: Output> Plugin for OutputPlugin<O> {
         registries
             .outputs
             .insert(O::NAME, construct::<O, dyn OutputSpec>);
+    }
+}
+
+/// A fixed output interval in simulated time: due at t = 0, then every `every` seconds, and
+/// at the last step.
+#[derive(Clone, Debug)]
+pub struct Interval {
+    pub every: f64,
+    next: f64,
+}
+
+impl Interval {
+    pub fn new(every: f64) -> Self {
+        Interval { every, next: 0.0 }
+    }
+
+    /// Whether an output is due now (and, if so, moves on to the next time).
+    pub fn due(&mut self, clock: &Clock) -> bool {
+        let eps = 1e-9 * self.every;
+        if !(clock.observing || clock.last_step || clock.time >= self.next - eps) {
+            return false;
+        }
+        while self.next <= clock.time + eps {
+            self.next += self.every;
+        }
+        true
+    }
+
+    /// Re-aligns with a run resumed at `time`: the next output is the first after it.
+    pub fn resume(&mut self, time: f64) {
+        self.next = ((time / self.every + 1e-9).floor() + 1.0) * self.every;
+    }
+}
+
+/// Listed output times: each is written at the first step at or past it.
+#[derive(Clone, Debug)]
+pub struct Instants {
+    times: Vec<f64>,
+    next: usize,
+}
+
+impl Instants {
+    /// `times` must be increasing (see [`check_instants`]).
+    pub fn new(times: Vec<f64>) -> Self {
+        Instants { times, next: 0 }
+    }
+
+    /// Whether an output is due now (and, if so, moves past every listed time reached).
+    pub fn due(&mut self, clock: &Clock) -> bool {
+        let Some(&t) = self.times.get(self.next) else {
+            return false;
+        };
+        if clock.time < t - 1e-12 {
+            return false;
+        }
+        while self
+            .times
+            .get(self.next)
+            .is_some_and(|&t| t <= clock.time + 1e-12)
+        {
+            self.next += 1;
+        }
+        true
+    }
+
+    /// How many listed times have passed; after a resume at `time`, those before it.
+    pub fn done(&self) -> usize {
+        self.next
+    }
+
+    pub fn resume(&mut self, time: f64) {
+        self.next = self.times.iter().filter(|&&t| t < time).count();
+    }
+}
+
+/// Checks a list of output times: non-empty, finite, non-negative, increasing.
+pub fn check_instants(at: &[f64]) -> Result<(), String> {
+    if at.is_empty() || at.iter().any(|t| !t.is_finite() || *t < 0.0) {
+        return Err("at must list one or more non-negative times".into());
+    }
+    if !at.windows(2).all(|w| w[1] > w[0]) {
+        return Err("at must be increasing".into());
+    }
+    Ok(())
+}
+
+/// Faults reported by outputs (an output that cannot write stops the run with a message).
+/// Outputs only read this resource, so any number of them can sit in the Output set without
+/// an ordering between them (a shared `ResMut<Health>` would make every pair ambiguous);
+/// `Simulation::step` moves the first report into [`Health`].
+#[derive(Resource, Debug, Default)]
+pub struct OutputFaults(Mutex<Option<Fault>>);
+
+impl OutputFaults {
+    /// Records `message` as the run's fault at the clock's step, unless one is recorded.
+    pub fn report(&self, clock: &Clock, message: String) {
+        let mut first = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        first.get_or_insert(Fault {
+            step: clock.step,
+            time: clock.time,
+            message,
+        });
+    }
+
+    /// Whether an output has reported a fault.
+    pub fn any(&self) -> bool {
+        self.0.lock().map(|f| f.is_some()).unwrap_or(true)
+    }
+
+    /// Moves the reported fault, if any, into `health` (which keeps its own first fault).
+    pub fn drain_into(&self, health: &mut Health) {
+        let mut first = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(f) = first.take() {
+            health.fault.get_or_insert(f);
+        }
+    }
+}
+
+/// Writes `bytes` to `path` atomically, or reports why not.
+pub fn write_or_fault(path: &Path, bytes: &[u8], clock: &Clock, faults: &OutputFaults) {
+    if let Err(e) = write_atomic(path, bytes) {
+        faults.report(clock, format!("cannot write {}: {e}", path.display()));
     }
 }
 

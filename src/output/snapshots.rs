@@ -1,4 +1,5 @@
-//! `Snapshots(every: 0.01)`: every material point's state as CSV at a fixed interval.
+//! `Snapshots(every: 0.01)` or `Snapshots(at: [0.0, 0.025, 0.078])`: every material point's
+//! state as CSV at a fixed interval or at listed times.
 //!
 //! Files go to `<out>/snapshots/snapshot_NNNNN.csv` with columns
 //! `t,body,x,y,vx,vy,mass,volume,pressure,shear_stress,plastic_strain_rate,plastic_strain,phase`
@@ -10,7 +11,7 @@ use std::fmt::Write as _;
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
-use super::{Output, RunDir, write_atomic};
+use super::{Instants, Interval, Output, OutputFaults, RunDir, check_instants, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::sim::Clock;
 use crate::step::StepSet;
@@ -19,13 +20,23 @@ use crate::step::StepSet;
 #[serde(deny_unknown_fields)]
 pub struct Snapshots {
     /// Interval between snapshots (s).
-    pub every: f64,
+    #[serde(default)]
+    pub every: Option<f64>,
+    /// Or the times to take them at (s), increasing.
+    #[serde(default)]
+    pub at: Option<Vec<f64>>,
+}
+
+/// When the next snapshot is due.
+#[derive(Debug)]
+enum When {
+    Every(Interval),
+    At(Instants),
 }
 
 #[derive(Resource, Debug)]
 struct SnapshotClock {
-    every: f64,
-    next: f64,
+    when: When,
     count: usize,
 }
 
@@ -33,31 +44,39 @@ impl Output for Snapshots {
     const NAME: &'static str = "Snapshots";
 
     fn validate(&self) -> Result<(), String> {
-        if self.every.is_finite() && self.every > 0.0 {
-            Ok(())
-        } else {
-            Err(format!(
-                "every must be a positive number of seconds, got {}",
-                self.every
-            ))
+        match (self.every, &self.at) {
+            (Some(every), None) if every.is_finite() && every > 0.0 => Ok(()),
+            (Some(every), None) => Err(format!(
+                "every must be a positive number of seconds, got {every}"
+            )),
+            (None, Some(at)) => check_instants(at),
+            _ => Err("give either every (an interval) or at (a list of times)".into()),
         }
     }
 
     fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(SnapshotClock {
-            every: self.every,
-            next: 0.0,
-            count: 0,
-        });
+        let when = match (self.every, &self.at) {
+            (Some(every), _) => When::Every(Interval::new(every)),
+            (None, at) => When::At(Instants::new(at.clone().unwrap_or_default())),
+        };
+        world.insert_resource(SnapshotClock { when, count: 0 });
         schedule.add_systems(write_snapshot.in_set(StepSet::Output));
     }
 
-    /// Snapshots were written at 0, every, 2 every, ... up to `time`.
+    /// Snapshots were written at 0, every, 2 every, ... (or at the listed times) up to
+    /// `time`.
     fn resume(&self, world: &mut World, time: f64) {
-        let done = (time / self.every + 1e-9).floor() as usize + 1;
         let mut clock = world.resource_mut::<SnapshotClock>();
-        clock.count = done;
-        clock.next = done as f64 * self.every;
+        clock.count = match &mut clock.when {
+            When::Every(interval) => {
+                interval.resume(time);
+                (time / interval.every + 1e-9).floor() as usize + 1
+            }
+            When::At(instants) => {
+                instants.resume(time);
+                instants.done()
+            }
+        };
     }
 }
 
@@ -65,15 +84,15 @@ fn write_snapshot(
     clock: Res<Clock>,
     dir: Res<RunDir>,
     mut snap: ResMut<SnapshotClock>,
-    mut health: ResMut<crate::diagnostics::Health>,
+    faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points, &PointStates)>,
 ) {
-    let eps = 1e-9 * snap.every;
-    if !(clock.observing || clock.last_step || clock.time >= snap.next - eps) {
+    let due = match &mut snap.when {
+        When::Every(interval) => interval.due(&clock),
+        When::At(instants) => instants.due(&clock),
+    };
+    if !due {
         return;
-    }
-    while snap.next <= clock.time + eps {
-        snap.next += snap.every;
     }
     let Some(dir) = &dir.0 else { return };
     let mut sorted: Vec<_> = bodies.iter().collect();
@@ -106,12 +125,9 @@ fn write_snapshot(
     let folder = dir.join("snapshots");
     let path = folder.join(format!("snapshot_{:05}.csv", snap.count));
     snap.count += 1;
-    let result = std::fs::create_dir_all(&folder).and_then(|_| write_atomic(&path, csv.as_bytes()));
-    if let Err(e) = result {
-        health.fault.get_or_insert(crate::error::Fault {
-            step: clock.step,
-            time: clock.time,
-            message: format!("cannot write {}: {e}", path.display()),
-        });
+    if let Err(e) = std::fs::create_dir_all(&folder) {
+        faults.report(&clock, format!("cannot create {}: {e}", folder.display()));
+        return;
     }
+    write_or_fault(&path, csv.as_bytes(), &clock, &faults);
 }

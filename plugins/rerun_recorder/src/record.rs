@@ -10,11 +10,9 @@ use std::path::PathBuf;
 
 use regolith::bevy_ecs::prelude::*;
 use regolith::body::{Body, BodyState, PointStates, Points};
-use regolith::diagnostics::Health;
-use regolith::error::Fault;
 use regolith::glam::DVec2;
 use regolith::grid::{GridField, GridGeometry};
-use regolith::output::RunDir;
+use regolith::output::{OutputFaults, RunDir};
 use regolith::sim::Clock;
 use rerun::{
     AnyValues, Arrows2D, LineStrips2D, Points2D, RecordingStream, RecordingStreamBuilder, Scalars,
@@ -111,14 +109,14 @@ pub fn record(
     dir: Res<RunDir>,
     grid: Res<GridGeometry>,
     mut recorder: ResMut<Recorder>,
-    mut health: ResMut<Health>,
+    faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points, &PointStates, &BodyState, &GridField)>,
 ) {
     let due = match recorder.params.every {
         Some(n) => clock.observing || clock.last_step || clock.step.is_multiple_of(n),
         None => clock.output_due,
     };
-    if !due || health.fault.is_some() {
+    if !due || faults.any() {
         return;
     }
     let mut sorted: Vec<_> = bodies.iter().collect();
@@ -132,11 +130,7 @@ pub fn record(
                 recorder.stream = Some(stream);
             }
             Err(message) => {
-                health.fault = Some(Fault {
-                    step: clock.step,
-                    time: clock.time,
-                    message,
-                });
+                faults.report(&clock, message);
                 return;
             }
         }

@@ -9,7 +9,8 @@ use regolith_rerun::RerunPlugin;
 use rerun::log::Chunk;
 use rerun::{ChunkStore, ChunkStoreConfig, StoreKind};
 
-/// An intruder falling onto a small granular bed, recorded every 20 steps.
+/// An intruder falling onto a small granular bed, recorded (with snapshots beside the
+/// recording: outputs must be able to share the Output set).
 fn scene(file: &Path, extra: &str) -> Scene {
     let text = format!(
         r#"(
@@ -28,7 +29,7 @@ fn scene(file: &Path, extra: &str) -> Scene {
              material: LinearElastic(density: 6500.0, youngs_modulus: 4.0e7, poisson_ratio: 0.45),
              velocity: (0.0, -2.0), tracked: true),
         ],
-        outputs: [Rerun(file: {:?}{extra})],
+        outputs: [Snapshots(every: 0.005), Rerun(file: {:?}{extra})],
     )"#,
         file.display().to_string()
     );

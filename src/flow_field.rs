@@ -1,0 +1,133 @@
+//! `FlowField(..)`: the granular velocity field normalised by the intruder's velocity, as in
+//! the paper's section 4.3.2 (Fig. 6, after Clark, Kondic & Behringer 2016).
+//!
+//! The paper shows "the nodal velocity field as projected into the material point
+//! positions": each point's grid-interpolated velocity `sum_i S_ip v_i`, which regolith keeps
+//! as the point's advection velocity. At each requested time the output writes, for every
+//! point of the bed, its position relative to the intruder's centre of mass in intruder
+//! widths (the paper's axes) and its velocity divided by the intruder's speed, so fields at
+//! different speeds can be compared: the paper finds the field ahead of the intruder keeps
+//! its normalised shape from 3.07 m/s down to 0.1 m/s (a "dynamic steady state").
+//! Files: `flow_field_<k>.csv`, columns `t,x,y,dx,dy,ux,uy` with `dx, dy` the offset from
+//! the intruder's centre over `scale` and `ux, uy` the velocity over the intruder's speed.
+
+use bevy_ecs::prelude::*;
+use glam::DVec2;
+use serde::Deserialize;
+
+use crate::body::{Body, BodyState, Points};
+use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
+use crate::sim::Clock;
+use crate::step::StepSet;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlowField {
+    /// The granular body.
+    pub body: String,
+    /// The intruder (its centre of mass and speed normalise the field).
+    pub intruder: String,
+    /// Length that normalises the offsets (m), e.g. the intruder's diameter.
+    pub scale: f64,
+    /// Times to write the field at (s), increasing.
+    pub at: Vec<f64>,
+}
+
+/// One normalised field.
+#[derive(Clone, Debug, Default)]
+pub struct NormalisedField {
+    pub time: f64,
+    /// The intruder's speed used (m/s).
+    pub speed: f64,
+    /// Offsets from the intruder's centre, in `scale` units.
+    pub offset: Vec<DVec2>,
+    /// Velocities over the intruder's speed.
+    pub velocity: Vec<DVec2>,
+}
+
+/// The fields written so far (kept for tests and figures).
+#[derive(Resource, Clone, Debug)]
+pub struct FlowFields {
+    spec: FlowField,
+    when: Instants,
+    pub fields: Vec<NormalisedField>,
+}
+
+impl Output for FlowField {
+    const NAME: &'static str = "FlowField";
+
+    fn validate(&self) -> Result<(), String> {
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            return Err(format!(
+                "scale must be a positive length, got {}",
+                self.scale
+            ));
+        }
+        check_instants(&self.at)?;
+        if self.body == self.intruder {
+            return Err("body and intruder must be different bodies".into());
+        }
+        Ok(())
+    }
+
+    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+        world.insert_resource(FlowFields {
+            spec: self.clone(),
+            when: Instants::new(self.at.clone()),
+            fields: Vec::new(),
+        });
+        schedule.add_systems(record_flow_field.in_set(StepSet::Output));
+    }
+
+    /// Fields due before `time` were written by the interrupted run.
+    fn resume(&self, world: &mut World, time: f64) {
+        world.resource_mut::<FlowFields>().when.resume(time);
+    }
+}
+
+fn record_flow_field(
+    clock: Res<Clock>,
+    dir: Res<RunDir>,
+    mut fields: ResMut<FlowFields>,
+    faults: Res<OutputFaults>,
+    bodies: Query<(&Body, &Points, &BodyState)>,
+) {
+    let k = fields.when.done();
+    if !fields.when.due(&clock) {
+        return;
+    }
+    let spec = &fields.spec;
+    let find = |name: &str| bodies.iter().find(|(b, _, _)| b.name == name);
+    let (Some((_, points, _)), Some((_, _, intruder))) = (find(&spec.body), find(&spec.intruder))
+    else {
+        return;
+    };
+    let speed = intruder.velocity.length();
+    let inverse = if speed > 0.0 { 1.0 / speed } else { 0.0 };
+    let live = |k: &usize| points.mass[*k] > 0.0;
+    let field = NormalisedField {
+        time: clock.time,
+        speed,
+        offset: (0..points.len())
+            .filter(live)
+            .map(|k| (points.position[k] - intruder.centre_of_mass) / spec.scale)
+            .collect(),
+        velocity: (0..points.len())
+            .filter(live)
+            .map(|k| points.advection[k] * inverse)
+            .collect(),
+    };
+    if let Some(dir) = &dir.0 {
+        let mut csv = String::from("t,x,y,dx,dy,ux,uy\n");
+        for (d, u) in field.offset.iter().zip(&field.velocity) {
+            let x = intruder.centre_of_mass + *d * spec.scale;
+            csv.push_str(&format!(
+                "{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
+                clock.time, x.x, x.y, d.x, d.y, u.x, u.y
+            ));
+        }
+        let path = dir.join(format!("flow_field_{k}.csv"));
+        write_or_fault(&path, csv.as_bytes(), &clock, &faults);
+    }
+    fields.fields.push(field);
+}

@@ -1,0 +1,131 @@
+//! `FreeSurface(..)`: the height of a granular body's free surface across the domain, at a
+//! fixed interval (the paper's section 4.3.2 compares the surface and splash shapes).
+//!
+//! The paper draws the surface as a contour of the points' number density. Here, per column
+//! of cells, the surface is the top of the highest cell whose number of points is at least
+//! half the body's initial number per cell (so thrown, dilute grains above it do not count,
+//! and a cell half-filled at rest sits at the surface). `free_surface.csv` has `t` and one
+//! column per cell column (`x` of its centre); a column without such a cell has an empty
+//! value. The record lives in memory and the file is rewritten at each interval.
+
+use bevy_ecs::prelude::*;
+use serde::Deserialize;
+
+use crate::body::{Body, Points};
+use crate::grid::GridGeometry;
+use crate::output::{Interval, Output, OutputFaults, RunDir, write_or_fault};
+use crate::sim::Clock;
+use crate::step::StepSet;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FreeSurface {
+    /// The granular body.
+    pub body: String,
+    /// Interval between records (s).
+    pub every: f64,
+}
+
+/// The surface profiles so far.
+#[derive(Resource, Clone, Debug)]
+pub struct SurfaceRecord {
+    spec: FreeSurface,
+    interval: Interval,
+    /// Points per cell at t = 0 in the body's densest cell.
+    full: usize,
+    counts: Vec<usize>,
+    pub times: Vec<f64>,
+    /// One height per cell column (NaN where the column has no dense cell).
+    pub heights: Vec<Vec<f64>>,
+}
+
+impl Output for FreeSurface {
+    const NAME: &'static str = "FreeSurface";
+
+    fn validate(&self) -> Result<(), String> {
+        if self.every.is_finite() && self.every > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("every must be a positive time, got {}", self.every))
+        }
+    }
+
+    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+        world.insert_resource(SurfaceRecord {
+            spec: self.clone(),
+            interval: Interval::new(self.every),
+            full: 0,
+            counts: Vec::new(),
+            times: Vec::new(),
+            heights: Vec::new(),
+        });
+        schedule.add_systems(record_surface.in_set(StepSet::Output));
+    }
+}
+
+fn record_surface(
+    clock: Res<Clock>,
+    dir: Res<RunDir>,
+    grid: Res<GridGeometry>,
+    mut record: ResMut<SurfaceRecord>,
+    faults: Res<OutputFaults>,
+    bodies: Query<(&Body, &Points)>,
+) {
+    if !record.interval.due(&clock) {
+        return;
+    }
+    let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == record.spec.body) else {
+        return;
+    };
+    let [nx, ny] = grid.cells;
+    let rec = &mut *record;
+    rec.counts.clear();
+    rec.counts.resize(nx * ny, 0);
+    for (x, &m) in points.position.iter().zip(&points.mass) {
+        let c = (*x - grid.origin) / grid.cell_size;
+        if m > 0.0 && c.x >= 0.0 && c.y >= 0.0 && (c.x as usize) < nx && (c.y as usize) < ny {
+            rec.counts[c.y as usize * nx + c.x as usize] += 1;
+        }
+    }
+    if rec.full == 0 {
+        rec.full = rec.counts.iter().copied().max().unwrap_or(0);
+    }
+    let threshold = rec.full.div_ceil(2).max(1);
+    let heights: Vec<f64> = (0..nx)
+        .map(|i| {
+            (0..ny)
+                .rev()
+                .find(|&j| rec.counts[j * nx + i] >= threshold)
+                .map_or(f64::NAN, |j| {
+                    grid.origin.y + (j + 1) as f64 * grid.cell_size
+                })
+        })
+        .collect();
+    rec.times.push(clock.time);
+    rec.heights.push(heights);
+    if let Some(dir) = &dir.0 {
+        let mut csv = String::from("t");
+        for i in 0..nx {
+            let x = grid.origin.x + (i as f64 + 0.5) * grid.cell_size;
+            csv.push_str(&format!(",x{x:.5}"));
+        }
+        csv.push('\n');
+        for (t, row) in rec.times.iter().zip(&rec.heights) {
+            csv.push_str(&format!("{t:e}"));
+            for h in row {
+                if h.is_nan() {
+                    csv.push(',');
+                } else {
+                    csv.push_str(&format!(",{h:e}"));
+                }
+            }
+            csv.push('\n');
+        }
+        write_or_fault(
+            &dir.join("free_surface.csv"),
+            csv.as_bytes(),
+            &clock,
+            &faults,
+        );
+    }
+}
