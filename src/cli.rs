@@ -85,6 +85,22 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run the coarse versions of the paper's experiments (reusing finished runs) and draw
+    /// the paper's figures from them as PNG.
+    Figures {
+        /// Where the figures go.
+        #[arg(long, default_value = "docs/figures")]
+        out: PathBuf,
+        /// Where the runs go (kept, and reused by the next call).
+        #[arg(long, default_value = "out/figures")]
+        runs: PathBuf,
+        /// The directory holding the shipped scenes.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+        /// Runs at once in the sweeps (default: the number of cores).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
+    },
     /// Continue a run from the checkpoint.bin in its output directory.
     Resume {
         /// The run's output directory.
@@ -245,6 +261,24 @@ pub fn main_with(app: Regolith) -> ExitCode {
             depths,
             out,
         } => fit(&runs, &body, depths.as_deref(), out),
+        Command::Figures {
+            out,
+            runs,
+            scenes,
+            jobs,
+        } => crate::figures::make_figures(
+            &registries,
+            &scenes,
+            &runs,
+            &out,
+            jobs.map(|j| j as usize),
+            &|line: &str| println!("{line}"),
+        )
+        .map(|files| {
+            for f in files {
+                println!("{}", f.display());
+            }
+        }),
         Command::Check {
             scene,
             sets,

@@ -14,6 +14,7 @@ pub mod cli;
 pub mod contact;
 pub mod diagnostics;
 pub mod error;
+pub mod figures;
 pub mod fill;
 pub mod flow_field;
 pub mod free_surface;

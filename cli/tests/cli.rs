@@ -263,3 +263,56 @@ fn recording_options_without_a_recording_are_an_error() {
         "{err}"
     );
 }
+
+/// `regolith fit` on run directories: writes the table, and says clearly when it cannot fit.
+#[test]
+fn fit_writes_a_table_or_says_why_not() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two synthetic runs of a constant deceleration (f only, h = 0): z = v0 t - a t^2 / 2.
+    for (k, v0) in [2.0f64, 4.0].iter().enumerate() {
+        let run = dir.path().join(format!("run{k}"));
+        std::fs::create_dir_all(&run).unwrap();
+        let a = 20.0;
+        let mut csv = String::from("t,intruder_x,intruder_y,intruder_vx,intruder_vy\n");
+        let mut t = 0.0;
+        while v0 - a * t > 0.0 {
+            let z = v0 * t - 0.5 * a * t * t;
+            csv.push_str(&format!("{t},0.5,{},0,{}\n", 0.6 - z, -(v0 - a * t)));
+            t += 1e-3;
+        }
+        std::fs::write(run.join("trajectory.csv"), csv).unwrap();
+        std::fs::write(
+            run.join("summary.json"),
+            r#"{"status": "completed", "gravity": [0.0, -9.81],
+                "bodies": [{"name": "intruder", "mass": 2.0}], "impact": {"contact_time": 0.0}}"#,
+        )
+        .unwrap();
+    }
+    let table = dir.path().join("f.csv");
+    let o = regolith(&[
+        "fit",
+        dir.path().join("run0").to_str().unwrap(),
+        dir.path().join("run1").to_str().unwrap(),
+        "--depths",
+        "0.01:0.08:8",
+        "--out",
+        table.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&table).unwrap();
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows[0], "depth,f,h,runs,residual");
+    assert_eq!(rows.len(), 9, "{text}");
+    // m (g - z'') = m (g + a) everywhere: f = 2 x 29.81, h = 0.
+    for row in &rows[1..] {
+        let v: Vec<f64> = row.split(',').map(|c| c.parse().unwrap()).collect();
+        assert!((v[1] - 59.62).abs() < 0.05 && v[2].abs() < 0.01, "{row}");
+    }
+    let o = regolith(&["fit", dir.path().join("run0").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("two or more speeds"), "{err}");
+    let o = regolith(&["fit", "/nonexistent/run"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("summary.json"), "{err}");
+}

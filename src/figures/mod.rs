@@ -1,0 +1,389 @@
+//! `regolith figures`: runs the coarse versions of the paper's experiments and draws the
+//! paper's figures from them (PNG), so every committed figure can be regenerated.
+//!
+//! Runs go to `--runs` (default `out/figures`) and are reused when already complete (the
+//! sweeps skip finished runs, the single scenes are skipped when their `summary.json` says
+//! completed); figures go to `--out` (default `docs/figures`). Every figure's title names
+//! the resolution (COARSE: these are the CI-sized scenes, not the paper's) and the run cost.
+//! The figures: final depth and stopping time against impact energy per tip slope (Fig. 3),
+//! the Poncelet terms f(z) and h(z) (Fig. 4), mu(I) against the rate-independent bed
+//! (Fig. 10), the pressure space-time diagram with the p-wave line (Fig. 5), the normalised
+//! flow field ahead of the disc (Fig. 6) and splash snapshots (Fig. 7).
+
+mod plot;
+
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use crate::error::{Error, SceneError};
+use crate::poncelet::{fit, load_run};
+use crate::registry::Registries;
+use crate::run::{CheckpointEvery, Provenance, run_scene};
+use crate::scene::Scene;
+use crate::sweep::{Sweep, run_sweep};
+
+use plot::Series;
+
+/// The experiment thickness (m) that turns 2D energies (J/m) into the paper's joules.
+const THICKNESS: f64 = 0.003;
+/// Tip slopes and impact speeds of the depth-energy sweep.
+const SLOPES: [f64; 3] = [0.5, 1.5, 2.5];
+const SPEEDS: [f64; 3] = [2.0, 3.55, 5.0];
+
+fn fail(what: &str, e: impl std::fmt::Display) -> Error {
+    Error::Scene(SceneError::file("regolith figures", format!("{what}: {e}")))
+}
+
+/// Runs what is missing under `runs` and draws every figure into `out`; returns the files.
+pub fn make_figures(
+    registries: &Rc<Registries>,
+    scenes: &Path,
+    runs: &Path,
+    out: &Path,
+    jobs: Option<usize>,
+    report: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<PathBuf>, Error> {
+    plot::register_font().map_err(|e| fail("font", e))?;
+    std::fs::create_dir_all(runs).map_err(|e| fail(&runs.display().to_string(), e))?;
+    std::fs::create_dir_all(out).map_err(|e| fail(&out.display().to_string(), e))?;
+    let impact = scenes.join("impact_tipped_coarse.ron");
+    let impact = std::path::absolute(&impact).map_err(|e| fail("scenes", e))?;
+    let speeds: Vec<String> = SPEEDS.iter().map(|v| format!("\"(0.0, -{v})\"")).collect();
+    let slopes: Vec<String> = SLOPES.iter().map(|s| format!("\"{s}\"")).collect();
+    let shared: Registries = (**registries).clone();
+    let sweep = |name: &str, set: &str, vary: String| -> Result<PathBuf, Error> {
+        let file = runs.join(format!("{name}.ron"));
+        let text = format!(
+            "Sweep(name: {name:?}, scene: {:?}, set: [{set}], vary: [{vary}])",
+            impact.display().to_string()
+        );
+        std::fs::write(&file, text).map_err(|e| fail(&file.display().to_string(), e))?;
+        let spec = Sweep::load(&file)?;
+        let dir = runs.join(name);
+        report(&format!("sweep {name}: {} runs", spec.plan().len()));
+        run_sweep(&file, &spec, &dir, jobs, || Rc::new(shared.clone()), report)?;
+        Ok(dir)
+    };
+    let speed_axis = format!(
+        "(key: \"bodies.intruder.velocity\", values: [{}])",
+        speeds.join(", ")
+    );
+    let depth_dir = sweep(
+        "depth_energy",
+        "",
+        format!(
+            "(key: \"bodies.intruder.shape.slope\", values: [{}]), {speed_axis}",
+            slopes.join(", ")
+        ),
+    )?;
+    let rate_dir = sweep(
+        "rate_independent",
+        "\"bodies.bed.material=DruckerPrager(youngs_modulus: 2.0e7, poisson_ratio: 0.45, \
+         grain_density: 1280.0, packing_fraction: 0.79, mu_s: 0.320)\", \
+         \"bodies.intruder.shape.slope=1.5\"",
+        speed_axis.clone(),
+    )?;
+    let single = |name: &str| -> Result<PathBuf, Error> {
+        let dir = runs.join(name);
+        let done = std::fs::read_to_string(dir.join("summary.json"))
+            .is_ok_and(|s| s.contains("\"status\": \"completed\""));
+        if !done {
+            report(&format!("run {name}"));
+            let path = scenes.join(format!("{name}.ron"));
+            let (scene, text) = Scene::load(&path, &[], registries)?;
+            let from = Provenance {
+                file: &path.display().to_string(),
+                text: &text,
+                overrides: &[],
+            };
+            run_scene(&scene, &from, &dir, CheckpointEvery(None), &mut |_: &_| {})?;
+        }
+        Ok(dir)
+    };
+    let front_dir = single("force_propagation_coarse")?;
+    let flow_dir = single("flow_field_coarse")?;
+    let splash_dir = single("splash_seguin_coarse")?;
+
+    let mut written = Vec::new();
+    let mut draw = |name: &str, result: Result<(), String>| -> Result<(), Error> {
+        let path = out.join(name);
+        result.map_err(|e| fail(&path.display().to_string(), e))?;
+        written.push(path);
+        Ok(())
+    };
+    let impacts = read_impacts(&depth_dir)?;
+    let cost = |rows: &[Impact]| rows.iter().map(|r| r.wall).sum::<f64>();
+    let by_slope = |rows: &[Impact], f: fn(&Impact) -> f64| -> Vec<Series> {
+        SLOPES
+            .iter()
+            .map(|&s| Series {
+                label: format!("s = {s}"),
+                points: rows
+                    .iter()
+                    .filter(|r| (r.slope - s).abs() < 1e-9)
+                    .map(|r| (r.energy, f(r)))
+                    .collect(),
+                hollow: false,
+            })
+            .collect()
+    };
+    let coarse = format!(
+        "COARSE 50 x 50 cells, {} runs, {:.0} s of runs",
+        impacts.len(),
+        cost(&impacts)
+    );
+    draw(
+        "depth_energy.png",
+        plot::curves(
+            &out.join("depth_energy.png"),
+            &format!("Final depth against impact energy (paper Fig. 3 left); {coarse}"),
+            "impact energy over 3 mm (J)",
+            "final depth (m)",
+            &by_slope(&impacts, |r| r.depth),
+        ),
+    )?;
+    draw(
+        "stopping_time_energy.png",
+        plot::curves(
+            &out.join("stopping_time_energy.png"),
+            &format!("Stopping time against impact energy (paper Fig. 3 right); {coarse}"),
+            "impact energy over 3 mm (J)",
+            "stopping time (s)",
+            &by_slope(&impacts, |r| r.stopping),
+        ),
+    )?;
+    let rate = read_impacts(&rate_dir)?;
+    let mu_i: Vec<(f64, f64)> = impacts
+        .iter()
+        .filter(|r| (r.slope - 1.5).abs() < 1e-9)
+        .map(|r| (r.energy, r.depth))
+        .collect();
+    draw(
+        "rate_independent.png",
+        plot::curves(
+            &out.join("rate_independent.png"),
+            &format!(
+                "mu(I) against rate-independent bed, s = 1.5 (paper Fig. 10); COARSE, {:.0} s",
+                cost(&rate)
+            ),
+            "impact energy over 3 mm (J)",
+            "final depth (m)",
+            &[
+                Series {
+                    label: "mu(I)".into(),
+                    points: mu_i,
+                    hollow: false,
+                },
+                Series {
+                    label: "rate-independent (Drucker-Prager)".into(),
+                    points: rate.iter().map(|r| (r.energy, r.depth)).collect(),
+                    hollow: true,
+                },
+            ],
+        ),
+    )?;
+    let shape: Vec<PathBuf> = impacts
+        .iter()
+        .filter(|r| (r.slope - 1.5).abs() < 1e-9)
+        .map(|r| r.dir.clone())
+        .collect();
+    let poncelet_runs = shape
+        .iter()
+        .map(|d| load_run(d, "intruder"))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| fail("Poncelet fit", e))?;
+    let depths = crate::poncelet::default_depths(&poncelet_runs);
+    let terms = fit(&poncelet_runs, &depths);
+    let f: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.f * THICKNESS)).collect();
+    let h: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.h * THICKNESS)).collect();
+    draw(
+        "poncelet_f.png",
+        plot::curves(
+            &out.join("poncelet_f.png"),
+            "Poncelet static term f(z), s = 1.5, 3 speeds (paper Fig. 4 left); COARSE",
+            "depth z (m)",
+            "f over 3 mm (N)",
+            &[Series {
+                label: "f(z)".into(),
+                points: f,
+                hollow: false,
+            }],
+        ),
+    )?;
+    draw(
+        "poncelet_h.png",
+        plot::curves(
+            &out.join("poncelet_h.png"),
+            "Poncelet collisional term h(z), s = 1.5, 3 speeds (paper Fig. 4 right); COARSE",
+            "depth z (m)",
+            "h over 3 mm (kg/m)",
+            &[Series {
+                label: "h(z)".into(),
+                points: h,
+                hollow: false,
+            }],
+        ),
+    )?;
+    let diagram = read_space_time(&front_dir.join("pressure_front.csv"))?;
+    // PS-1 (the scene's bed): E = 20 MPa, nu = 0.45, rho_c = 0.79 x 1280 kg/m^3.
+    let (e, nu, rho_c) = (2.0e7f64, 0.45f64, 0.79 * 1280.0);
+    let wave = (e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) / rho_c).sqrt();
+    draw(
+        "pressure_space_time.png",
+        plot::space_time(
+            &out.join("pressure_space_time.png"),
+            "Mean pressure rise in 1 cm rings below the impact (paper Fig. 5); COARSE 100 x 100",
+            &diagram.times,
+            &diagram.radii,
+            &diagram.values,
+            wave,
+        ),
+    )?;
+    let (origins, vectors) = read_flow(&flow_dir.join("flow_field_1.csv"))?;
+    draw(
+        "flow_field.png",
+        plot::arrows(
+            &out.join("flow_field.png"),
+            "Bed velocity / disc speed at 45 ms, in disc diameters (paper Fig. 6); COARSE",
+            ("x offset / D", "y offset / D"),
+            &origins,
+            &vectors,
+            ((-1.5, 1.5), (-2.5, 0.5)),
+        ),
+    )?;
+    let mut panels = Vec::new();
+    for (k, label) in [(0usize, "t = 0"), (1, "t = 25 ms")] {
+        let file = splash_dir
+            .join("snapshots")
+            .join(format!("snapshot_{k:05}.csv"));
+        panels.push((label.to_string(), read_cloud(&file)?));
+    }
+    draw(
+        "splash.png",
+        plot::clouds(
+            &out.join("splash.png"),
+            "Splash of a 20 mm disc at 5 m/s, Seguin (2010) grains (paper Fig. 7); COARSE 4 mm",
+            &panels,
+            ((0.0, 0.2), (0.0, 0.12)),
+        ),
+    )?;
+    Ok(written)
+}
+
+/// One impact run's measures.
+struct Impact {
+    dir: PathBuf,
+    slope: f64,
+    /// Impact energy over the experiment's thickness (J).
+    energy: f64,
+    depth: f64,
+    stopping: f64,
+    wall: f64,
+}
+
+/// The completed runs of a sweep directory, with the slope read from their overrides.
+fn read_impacts(dir: &Path) -> Result<Vec<Impact>, Error> {
+    let dirs = crate::poncelet::expand_dirs(&[dir.to_path_buf()]).map_err(|e| fail("runs", e))?;
+    let mut out = Vec::new();
+    for d in dirs {
+        let text = std::fs::read_to_string(d.join("summary.json"))
+            .map_err(|e| fail(&d.display().to_string(), e))?;
+        let s: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| fail(&d.display().to_string(), e))?;
+        let slope = s["overrides"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|o| o.as_str()?.strip_prefix("bodies.intruder.shape.slope="))
+            .find_map(|v| v.parse::<f64>().ok())
+            .unwrap_or(f64::NAN);
+        let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+        out.push(Impact {
+            slope,
+            energy: num(&s["impact"]["impact_energy"]) * THICKNESS,
+            depth: num(&s["impact"]["final_depth"]),
+            stopping: num(&s["impact"]["stopping_time"]),
+            wall: num(&s["wall_s"]),
+            dir: d,
+        });
+    }
+    Ok(out)
+}
+
+fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| fail(&path.display().to_string(), e))?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    Ok((header, rows))
+}
+
+/// A space-time diagram: a row of bin values per time.
+struct SpaceTime {
+    times: Vec<f64>,
+    radii: Vec<f64>,
+    values: Vec<Vec<f64>>,
+}
+
+/// `pressure_front.csv`: times, bin radii (from the `rR` headers) and the rows.
+fn read_space_time(path: &Path) -> Result<SpaceTime, Error> {
+    let (header, rows) = read_csv(path)?;
+    Ok(SpaceTime {
+        radii: header[1..]
+            .iter()
+            .map(|h| h.trim_start_matches('r').parse().unwrap_or(f64::NAN))
+            .collect(),
+        times: rows.iter().map(|r| r[0]).collect(),
+        values: rows.iter().map(|r| r[1..].to_vec()).collect(),
+    })
+}
+
+/// `flow_field_K.csv`: offsets and normalised velocities (arrows scaled to show 0.25 D per
+/// unit of normalised velocity), every other point.
+fn read_flow(path: &Path) -> Result<(plot::Cloud, plot::Cloud), Error> {
+    let (_, rows) = read_csv(path)?;
+    let (mut o, mut v) = (Vec::new(), Vec::new());
+    for r in rows.iter().step_by(2) {
+        if r.len() >= 7 && r[3].abs() < 1.5 && r[4] > -2.5 && r[4] < 0.5 {
+            o.push((r[3], r[4]));
+            v.push((0.25 * r[5], 0.25 * r[6]));
+        }
+    }
+    Ok((o, v))
+}
+
+/// A snapshot's points, one cloud per body (in order of appearance).
+fn read_cloud(path: &Path) -> Result<Vec<Vec<(f64, f64)>>, Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| fail(&path.display().to_string(), e))?;
+    let mut names: Vec<String> = Vec::new();
+    let mut clouds: Vec<Vec<(f64, f64)>> = Vec::new();
+    for line in text.lines().skip(1) {
+        let c: Vec<&str> = line.split(',').collect();
+        if c.len() < 7 || c[6].parse::<f64>().unwrap_or(0.0) == 0.0 {
+            continue;
+        }
+        let k = match names.iter().position(|n| n == c[1]) {
+            Some(k) => k,
+            None => {
+                names.push(c[1].to_string());
+                clouds.push(Vec::new());
+                names.len() - 1
+            }
+        };
+        if let (Ok(x), Ok(y)) = (c[2].parse(), c[3].parse()) {
+            clouds[k].push((x, y));
+        }
+    }
+    Ok(clouds)
+}

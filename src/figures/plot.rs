@@ -1,0 +1,311 @@
+//! The chart kinds the figures need, on plotters' bitmap backend: curves with markers, a
+//! space-time heat map with a reference line, arrows, and point clouds.
+
+use std::path::Path;
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+
+/// One labelled series of `(x, y)` points.
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    /// Drawn hollow and dashed-looking (markers only) to set a variant apart.
+    pub hollow: bool,
+}
+
+type Result<T> = std::result::Result<T, String>;
+
+/// Points `(x, y)` drawn in one colour.
+pub type Cloud = Vec<(f64, f64)>;
+/// A panel's caption and its clouds.
+pub type Panel = (String, Vec<Cloud>);
+
+fn fail(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// Registers the bundled font once (plotters' ab_glyph text needs one).
+pub fn register_font() -> Result<()> {
+    static DONE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    let ok = *DONE.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
+            .is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err("the bundled font could not be loaded".into())
+    }
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+fn bounds(values: impl Iterator<Item = f64>, pad_zero: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if pad_zero {
+        lo = lo.min(0.0);
+    }
+    let pad = 0.05 * (hi - lo).max(1e-12);
+    (lo - pad, hi + pad)
+}
+
+/// A titled chart over `x` and `y` ranges with labelled axes.
+fn chart<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    size: u32,
+    ranges: ((f64, f64), (f64, f64)),
+    axes: (&str, &str),
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>>
+where
+    DB::ErrorType: 'static,
+{
+    let ((x0, x1), (y0, y1)) = ranges;
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", size))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(65)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(fail)?;
+    chart
+        .configure_mesh()
+        .x_desc(axes.0)
+        .y_desc(axes.1)
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(fail)?;
+    Ok(chart)
+}
+
+/// Draws the legend of the labelled series.
+fn legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(fail)
+}
+
+/// Curves with markers, one colour per series, a legend.
+pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> Result<()> {
+    let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
+    root.fill(&WHITE).map_err(fail)?;
+    let xs = bounds(
+        series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+        true,
+    );
+    let ys = bounds(
+        series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
+        true,
+    );
+    let mut chart = chart(&root, title, 18, (xs, ys), (x, y))?;
+    for (k, s) in series.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        let mut pts = s.points.clone();
+        pts.retain(|p| p.0.is_finite() && p.1.is_finite());
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let style = if s.hollow {
+            colour.stroke_width(1)
+        } else {
+            colour.stroke_width(2)
+        };
+        chart
+            .draw_series(LineSeries::new(pts.clone(), style))
+            .map_err(fail)?
+            .label(s.label.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        let hollow = s.hollow;
+        chart
+            .draw_series(pts.iter().map(move |&p| {
+                let marker = if hollow {
+                    colour.stroke_width(2)
+                } else {
+                    colour.filled()
+                };
+                Circle::new(p, 5, marker)
+            }))
+            .map_err(fail)?;
+    }
+    legend(&mut chart)?;
+    root.present().map_err(fail)
+}
+
+/// A heat map of `values[row][col]` over `times` (x) and `radii` (y), with the line
+/// `r = speed t` drawn over it.
+pub fn space_time(
+    path: &Path,
+    title: &str,
+    times: &[f64],
+    radii: &[f64],
+    values: &[Vec<f64>],
+    speed: f64,
+) -> Result<()> {
+    let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
+    root.fill(&WHITE).map_err(fail)?;
+    let dt = times
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    let dr = if radii.len() > 1 {
+        radii[1] - radii[0]
+    } else {
+        1.0
+    };
+    let (t1, r1) = (
+        times.last().copied().unwrap_or(1.0) + dt,
+        radii.last().copied().unwrap_or(1.0) + dr,
+    );
+    let ms = 1e3;
+    let axes = ("time (ms)", "distance from the impact point (m)");
+    let mut chart = chart(&root, title, 18, ((0.0, t1 * ms), (0.0, r1)), axes)?;
+    let top = values
+        .iter()
+        .flatten()
+        .copied()
+        .fold(0.0f64, f64::max)
+        .max(1e-12);
+    for (k, row) in values.iter().enumerate() {
+        let t = times[k];
+        for (b, &v) in row.iter().enumerate() {
+            let f = (v / top).clamp(0.0, 1.0);
+            let shade = RGBColor(
+                (255.0 * f) as u8,
+                (255.0 * (1.0 - (2.0 * f - 1.0).abs())) as u8,
+                (255.0 * (1.0 - f)) as u8,
+            );
+            let (r0, r1) = (radii[b] - 0.5 * dr, radii[b] + 0.5 * dr);
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [((t - 0.5 * dt) * ms, r0), ((t + 0.5 * dt) * ms, r1)],
+                    shade.filled(),
+                )))
+                .map_err(fail)?;
+        }
+    }
+    chart
+        .draw_series(LineSeries::new(
+            [(0.0, 0.0), (t1 * ms, speed * t1)],
+            BLACK.stroke_width(2),
+        ))
+        .map_err(fail)?
+        .label(format!("p-wave speed sqrt(M/rho_c) = {speed:.0} m/s"))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    legend(&mut chart)?;
+    root.present().map_err(fail)
+}
+
+/// Arrows from `origins` along `vectors` (same units as the axes).
+pub fn arrows(
+    path: &Path,
+    title: &str,
+    axes: (&str, &str),
+    origins: &[(f64, f64)],
+    vectors: &[(f64, f64)],
+    window: ((f64, f64), (f64, f64)),
+) -> Result<()> {
+    let root = BitMapBackend::new(path, (800, 800)).into_drawing_area();
+    root.fill(&WHITE).map_err(fail)?;
+    let mut chart = chart(&root, title, 16, window, axes)?;
+    let colour = PALETTE[0];
+    chart
+        .draw_series(origins.iter().zip(vectors).map(|(&o, &v)| {
+            PathElement::new(vec![o, (o.0 + v.0, o.1 + v.1)], colour.stroke_width(1))
+        }))
+        .map_err(fail)?;
+    chart
+        .draw_series(origins.iter().map(|&o| Circle::new(o, 1, colour.filled())))
+        .map_err(fail)?;
+    root.present().map_err(fail)
+}
+
+/// Point clouds side by side, one panel per `(caption, clouds)`; each cloud is one colour.
+pub fn clouds(
+    path: &Path,
+    title: &str,
+    panels: &[Panel],
+    window: ((f64, f64), (f64, f64)),
+) -> Result<()> {
+    let root = BitMapBackend::new(path, (600 * panels.len() as u32, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(fail)?;
+    let root = root.titled(title, ("sans-serif", 20)).map_err(fail)?;
+    let areas = root.split_evenly((1, panels.len().max(1)));
+    for (area, (caption, clouds)) in areas.iter().zip(panels) {
+        let mut chart = chart(area, caption, 16, window, ("x (m)", "y (m)"))?;
+        for (k, cloud) in clouds.iter().enumerate() {
+            let colour = PALETTE[k % PALETTE.len()];
+            chart
+                .draw_series(cloud.iter().map(|&p| Circle::new(p, 1, colour.filled())))
+                .map_err(fail)?;
+        }
+    }
+    root.present().map_err(fail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn is_png(path: &Path) -> bool {
+        std::fs::read(path).is_ok_and(|b| b.starts_with(b"\x89PNG\r\n\x1a\n") && b.len() > 1000)
+    }
+
+    #[test]
+    fn every_chart_kind_writes_a_png() {
+        register_font().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let series = [Series {
+            label: "a".into(),
+            points: vec![(0.0, 1.0), (1.0, 2.0), (2.0, f64::NAN)],
+            hollow: true,
+        }];
+        let p = dir.path().join("curves.png");
+        curves(&p, "t", "x", "y", &series).unwrap();
+        assert!(is_png(&p));
+        let p = dir.path().join("st.png");
+        let values = vec![vec![0.0, 1.0], vec![2.0, 0.5]];
+        space_time(&p, "t", &[0.0, 1e-4], &[0.005, 0.015], &values, 274.0).unwrap();
+        assert!(is_png(&p));
+        let p = dir.path().join("arrows.png");
+        arrows(
+            &p,
+            "t",
+            ("x", "y"),
+            &[(0.0, 0.0)],
+            &[(0.1, -0.2)],
+            ((-1.0, 1.0), (-1.0, 1.0)),
+        )
+        .unwrap();
+        assert!(is_png(&p));
+        let p = dir.path().join("clouds.png");
+        let panels = vec![(
+            "t = 0".to_string(),
+            vec![vec![(0.1, 0.1)], vec![(0.2, 0.2)]],
+        )];
+        clouds(&p, "t", &panels, ((0.0, 1.0), (0.0, 1.0))).unwrap();
+        assert!(is_png(&p));
+    }
+}
