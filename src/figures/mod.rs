@@ -244,7 +244,7 @@ pub fn make_figures(
         "flow_field.png",
         plot::arrows(
             &out.join("flow_field.png"),
-            "Bed velocity / disc speed at 45 ms, in disc diameters (paper Fig. 6); COARSE",
+            "Bed velocity / disc speed at 45 ms (arrow: 0.15 D per unit), offsets in D (Fig. 6); COARSE",
             ("x offset / D", "y offset / D"),
             &origins,
             &vectors,
@@ -349,15 +349,15 @@ fn read_space_time(path: &Path) -> Result<SpaceTime, Error> {
     })
 }
 
-/// `flow_field_K.csv`: offsets and normalised velocities (arrows scaled to show 0.25 D per
-/// unit of normalised velocity), every other point.
+/// `flow_field_K.csv`: offsets and normalised velocities of every point (arrows scaled to
+/// show 0.15 D per unit of normalised velocity).
 fn read_flow(path: &Path) -> Result<(plot::Cloud, plot::Cloud), Error> {
     let (_, rows) = read_csv(path)?;
     let (mut o, mut v) = (Vec::new(), Vec::new());
-    for r in rows.iter().step_by(2) {
+    for r in &rows {
         if r.len() >= 7 && r[3].abs() < 1.5 && r[4] > -2.5 && r[4] < 0.5 {
             o.push((r[3], r[4]));
-            v.push((0.25 * r[5], 0.25 * r[6]));
+            v.push((0.15 * r[5], 0.15 * r[6]));
         }
     }
     Ok((o, v))
