@@ -259,9 +259,12 @@ impl Simulation {
     pub fn step(&mut self) -> Result<(), Fault> {
         self.world.resource_mut::<Timings>().restart();
         self.schedule.run(&mut self.world);
-        self.world.resource_scope(|world, mut health: Mut<Health>| {
-            world.resource::<OutputFaults>().drain_into(&mut health)
-        });
+        if let Some(fault) = self.world.resource::<OutputFaults>().take() {
+            self.world
+                .resource_mut::<Health>()
+                .fault
+                .get_or_insert(fault);
+        }
         if let Some(f) = &self.world.resource::<Health>().fault {
             return Err(f.clone());
         }

@@ -19,7 +19,6 @@ use std::sync::Mutex;
 use bevy_ecs::prelude::*;
 use serde::de::DeserializeOwned;
 
-use crate::diagnostics::Health;
 use crate::error::Fault;
 use crate::plugin::Plugin;
 use crate::registry::{IntoSpec, Registries, construct};
@@ -179,7 +178,7 @@ pub fn check_instants(at: &[f64]) -> Result<(), String> {
 /// Faults reported by outputs (an output that cannot write stops the run with a message).
 /// Outputs only read this resource, so any number of them can sit in the Output set without
 /// an ordering between them (a shared `ResMut<Health>` would make every pair ambiguous);
-/// `Simulation::step` moves the first report into [`Health`].
+/// `Simulation::step` moves the first report into `diagnostics::Health`.
 #[derive(Resource, Debug, Default)]
 pub struct OutputFaults(Mutex<Option<Fault>>);
 
@@ -199,12 +198,9 @@ impl OutputFaults {
         self.0.lock().map(|f| f.is_some()).unwrap_or(true)
     }
 
-    /// Moves the reported fault, if any, into `health` (which keeps its own first fault).
-    pub fn drain_into(&self, health: &mut Health) {
-        let mut first = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(f) = first.take() {
-            health.fault.get_or_insert(f);
-        }
+    /// Takes the reported fault, if any.
+    pub fn take(&self) -> Option<Fault> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).take()
     }
 }
 
