@@ -13,7 +13,8 @@
 //!   point as the component `<field>` (selecting a point in the viewer shows it);
 //! * `world/domain`: the box outline (static);
 //! * `plots/<body>/kinetic_energy` for every body; for tracked bodies also
-//!   `plots/<body>/depth` (downward displacement of the centre of mass since t = 0),
+//!   `plots/<body>/depth` (downward displacement of the centre of mass since the first
+//!   frame: t = 0, or the time a resumed run starts recording),
 //!   `plots/<body>/velocity/{x,y}`, `plots/<body>/acceleration/{x,y}` (centre-of-mass velocity
 //!   differenced between recorded frames) and `plots/<body>/contact_force/{x,y}` (the force
 //!   the other bodies exert through contact, N per metre of thickness);

@@ -33,7 +33,7 @@ struct Last {
 pub struct Recorder {
     params: Rerun,
     stream: Option<RecordingStream>,
-    /// Centre of mass of each body at t = 0 (for the depth).
+    /// Centre of mass of each body at the first frame (for the depth).
     start: Vec<DVec2>,
     last: Vec<Option<Last>>,
     values: Vec<Vec<f64>>,
@@ -103,7 +103,6 @@ const VIEWER: &str = "cannot start the Rerun viewer (install the one matching th
                       `pip install rerun-sdk==0.36.3`, which provides the `rerun` command)";
 
 /// Logs a frame when one is due.
-#[allow(clippy::too_many_arguments)]
 pub fn record(
     clock: Res<Clock>,
     dir: Res<RunDir>,
