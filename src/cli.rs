@@ -84,6 +84,11 @@ enum Command {
         /// Output CSV (default: poncelet.csv in the first directory).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Take z' and z'' from a least-squares parabola over this window (s) around each
+        /// t_k instead of the interpolating spline (the paper's way); it averages out
+        /// oscillations shorter than the window, such as grid-crossing pulses.
+        #[arg(long, value_name = "SECONDS")]
+        window: Option<f64>,
     },
     /// Run the coarse versions of the paper's experiments (reusing finished runs) and draw
     /// the paper's figures from them as PNG.
@@ -260,7 +265,8 @@ pub fn main_with(app: Regolith) -> ExitCode {
             body,
             depths,
             out,
-        } => fit(&runs, &body, depths.as_deref(), out),
+            window,
+        } => fit(&runs, &body, depths.as_deref(), out, window),
         Command::Figures {
             out,
             runs,
@@ -419,9 +425,15 @@ fn fit(
     body: &str,
     depths: Option<&str>,
     out: Option<PathBuf>,
+    window: Option<f64>,
 ) -> Result<(), Error> {
-    use crate::poncelet::{default_depths, expand_dirs, fit, load_run, to_csv};
+    use crate::poncelet::{Derivatives, default_depths, expand_dirs, fit, load_run, to_csv};
     let fail = |m: String| Error::Scene(SceneError::file("regolith fit", m));
+    let how = match window {
+        None => Derivatives::Spline,
+        Some(w) if w.is_finite() && w > 0.0 => Derivatives::Window(w),
+        Some(w) => return Err(fail(format!("--window must be a positive time, got {w}"))),
+    };
     let dirs = expand_dirs(dirs).map_err(fail)?;
     let runs = dirs
         .iter()
@@ -438,7 +450,7 @@ fn fit(
         Some(spec) => parse_depths(spec).map_err(|e| fail(format!("--depths {spec}: {e}")))?,
         None => default_depths(&runs),
     };
-    let points = fit(&runs, &depths);
+    let points = fit(&runs, &depths, how);
     let out = out.unwrap_or_else(|| dirs[0].join("poncelet.csv"));
     crate::output::write_atomic(&out, to_csv(&points).as_bytes())
         .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;

@@ -174,9 +174,67 @@ pub struct PonceletPoint {
     pub residual: f64,
 }
 
+/// How the velocity and acceleration at `t_k` are taken from a run's depth samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Derivatives {
+    /// From the interpolating spline, as the paper does.
+    Spline,
+    /// From a least-squares parabola through the samples within half this window (s) of
+    /// `t_k`: it averages out oscillations shorter than the window (on a coarse grid the
+    /// deceleration pulses each time the intruder crosses a cell), at the price of bias where
+    /// the acceleration changes within the window.
+    Window(f64),
+}
+
+/// Slope and curvature (`z'`, `z''`) at `tk` of the least-squares parabola through the
+/// samples within `half` of it; `None` with fewer than four samples.
+fn local_parabola(t: &[f64], z: &[f64], tk: f64, half: f64) -> Option<(f64, f64)> {
+    let mut m = [[0.0f64; 3]; 3];
+    let mut r = [0.0f64; 3];
+    let mut count = 0;
+    for (&ti, &zi) in t.iter().zip(z) {
+        let tau = ti - tk;
+        if tau.abs() > half {
+            continue;
+        }
+        count += 1;
+        let p = [1.0, tau, tau * tau];
+        for a in 0..3 {
+            r[a] += p[a] * zi;
+            for b in 0..3 {
+                m[a][b] += p[a] * p[b];
+            }
+        }
+    }
+    if count < 4 {
+        return None;
+    }
+    // Gaussian elimination on the 3 x 3 normal equations.
+    for c in 0..3 {
+        let pivot = m[c][c];
+        if pivot.abs() < 1e-300 {
+            return None;
+        }
+        let upper = m[c];
+        for row in c + 1..3 {
+            let w = m[row][c] / pivot;
+            for (entry, above) in m[row].iter_mut().zip(upper).skip(c) {
+                *entry -= w * above;
+            }
+            r[row] -= w * r[c];
+        }
+    }
+    let mut x = [0.0f64; 3];
+    for c in (0..3).rev() {
+        let tail: f64 = (c + 1..3).map(|k| m[c][k] * x[k]).sum();
+        x[c] = (r[c] - tail) / m[c][c];
+    }
+    Some((x[1], 2.0 * x[2]))
+}
+
 /// Fits `f` and `h` at each of `depths` from `runs`; a depth reached (while descending) by
 /// fewer than two runs with distinct speeds is left out.
-pub fn fit(runs: &[PonceletRun], depths: &[f64]) -> Vec<PonceletPoint> {
+pub fn fit(runs: &[PonceletRun], depths: &[f64], how: Derivatives) -> Vec<PonceletPoint> {
     let splines: Vec<_> = runs
         .iter()
         .filter_map(|r| {
@@ -191,10 +249,16 @@ pub fn fit(runs: &[PonceletRun], depths: &[f64]) -> Vec<PonceletPoint> {
         let rows: Vec<(f64, f64)> = splines
             .iter()
             .filter(|(_, s, lo, _, deepest)| zk <= *deepest && zk >= s.eval(*lo).0)
-            .map(|(r, s, lo, hi, _)| {
+            .filter_map(|(r, s, lo, hi, _)| {
                 let tk = s.first_reach(zk, *lo, *hi);
-                let (_, v, a) = s.eval(tk);
-                (v * v, r.mass * (r.gravity - a))
+                let (v, a) = match how {
+                    Derivatives::Spline => {
+                        let (_, v, a) = s.eval(tk);
+                        (v, a)
+                    }
+                    Derivatives::Window(w) => local_parabola(&r.t, &r.z, tk, 0.5 * w)?,
+                };
+                Some((v * v, r.mass * (r.gravity - a)))
             })
             .collect();
         let Some((f, h)) = line_fit(&rows) else {
@@ -342,6 +406,19 @@ mod tests {
             assert!((d - x.cos()).abs() < 1e-4);
             assert!((c + x.sin()).abs() < 1e-2, "curvature at {x}");
         }
+    }
+
+    #[test]
+    fn the_local_parabola_is_exact_for_parabolas() {
+        let t: Vec<f64> = (0..50).map(|k| k as f64 * 1e-3).collect();
+        let z: Vec<f64> = t.iter().map(|&x| 0.1 + 3.0 * x - 40.0 * x * x).collect();
+        let (v, a) = local_parabola(&t, &z, 0.02, 0.006).unwrap();
+        assert!((v - (3.0 - 80.0 * 0.02)).abs() < 1e-9 && (a + 80.0).abs() < 1e-6);
+        assert_eq!(
+            local_parabola(&t, &z, 0.02, 0.001),
+            None,
+            "three samples are too few"
+        );
     }
 
     #[test]

@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use crate::error::{Error, SceneError};
-use crate::poncelet::{fit, load_run};
+use crate::poncelet::{Derivatives, fit, load_run};
 use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, run_scene};
 use crate::scene::Scene;
@@ -193,14 +193,16 @@ pub fn make_figures(
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| fail("Poncelet fit", e))?;
     let depths = crate::poncelet::default_depths(&poncelet_runs);
-    let terms = fit(&poncelet_runs, &depths);
+    // Derivatives over an 18 ms window: the interpolating spline of the paper turns the
+    // coarse grid's crossing pulses into noise (docs/VALIDATION.md).
+    let terms = fit(&poncelet_runs, &depths, Derivatives::Window(0.018));
     let f: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.f * THICKNESS)).collect();
     let h: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.h * THICKNESS)).collect();
     draw(
         "poncelet_f.png",
         plot::curves(
             &out.join("poncelet_f.png"),
-            "Poncelet static term f(z), s = 1.5, 3 speeds (paper Fig. 4 left); COARSE",
+            "Poncelet f(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 left); COARSE",
             "depth z (m)",
             "f over 3 mm (N)",
             &[Series {
@@ -214,7 +216,7 @@ pub fn make_figures(
         "poncelet_h.png",
         plot::curves(
             &out.join("poncelet_h.png"),
-            "Poncelet collisional term h(z), s = 1.5, 3 speeds (paper Fig. 4 right); COARSE",
+            "Poncelet h(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 right); COARSE",
             "depth z (m)",
             "h over 3 mm (kg/m)",
             &[Series {
