@@ -13,7 +13,7 @@ use serde::Deserialize;
 
 use crate::body::{Body, Points};
 use crate::grid::GridGeometry;
-use crate::output::{Interval, Output, OutputFaults, RunDir, write_or_fault};
+use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -104,23 +104,10 @@ fn record_surface(
     rec.times.push(clock.time);
     rec.heights.push(heights);
     if let Some(dir) = &dir.0 {
-        let mut csv = String::from("t");
-        for i in 0..nx {
-            let x = grid.origin.x + (i as f64 + 0.5) * grid.cell_size;
-            csv.push_str(&format!(",x{x:.5}"));
-        }
-        csv.push('\n');
-        for (t, row) in rec.times.iter().zip(&rec.heights) {
-            csv.push_str(&format!("{t:e}"));
-            for h in row {
-                if h.is_nan() {
-                    csv.push(',');
-                } else {
-                    csv.push_str(&format!(",{h:e}"));
-                }
-            }
-            csv.push('\n');
-        }
+        let labels: Vec<String> = (0..nx)
+            .map(|i| format!("x{:.5}", grid.origin.x + (i as f64 + 0.5) * grid.cell_size))
+            .collect();
+        let csv = series_csv(&labels, &rec.times, &rec.heights);
         write_or_fault(
             &dir.join("free_surface.csv"),
             csv.as_bytes(),

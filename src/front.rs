@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, Points};
 use crate::linefit::line_fit;
-use crate::output::{Interval, Output, OutputFaults, RunDir, write_or_fault};
+use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -94,19 +94,8 @@ impl PressureRecord {
     }
 
     fn csv(&self) -> String {
-        let mut s = String::from("t");
-        for r in self.radii() {
-            s.push_str(&format!(",r{r:.5}"));
-        }
-        s.push('\n');
-        for (t, row) in self.times.iter().zip(&self.rows) {
-            s.push_str(&format!("{t:e}"));
-            for v in row {
-                s.push_str(&format!(",{v:e}"));
-            }
-            s.push('\n');
-        }
-        s
+        let labels: Vec<String> = self.radii().iter().map(|r| format!("r{r:.5}")).collect();
+        series_csv(&labels, &self.times, &self.rows)
     }
 }
 

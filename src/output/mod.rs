@@ -204,6 +204,29 @@ impl OutputFaults {
     }
 }
 
+/// A time-series table as CSV: a `t` column, then one column per label; a NaN value is
+/// left empty.
+pub fn series_csv(labels: &[String], times: &[f64], rows: &[Vec<f64>]) -> String {
+    let mut s = String::from("t");
+    for label in labels {
+        s.push(',');
+        s.push_str(label);
+    }
+    s.push('\n');
+    for (t, row) in times.iter().zip(rows) {
+        s.push_str(&format!("{t:e}"));
+        for v in row {
+            if v.is_nan() {
+                s.push(',');
+            } else {
+                s.push_str(&format!(",{v:e}"));
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
 /// Writes `bytes` to `path` atomically, or reports why not.
 pub fn write_or_fault(path: &Path, bytes: &[u8], clock: &Clock, faults: &OutputFaults) {
     if let Err(e) = write_atomic(path, bytes) {
