@@ -92,7 +92,7 @@ fn record_flow_field(
     faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points, &BodyState)>,
 ) {
-    let k = fields.when.done();
+    let index = fields.when.done();
     if !fields.when.due(&clock) {
         return;
     }
@@ -104,29 +104,31 @@ fn record_flow_field(
     };
     let speed = intruder.velocity.length();
     let inverse = if speed > 0.0 { 1.0 / speed } else { 0.0 };
-    let live = |k: &usize| points.mass[*k] > 0.0;
+    let live: Vec<usize> = (0..points.len())
+        .filter(|&k| points.mass[k] > 0.0)
+        .collect();
     let field = NormalisedField {
         time: clock.time,
         speed,
-        offset: (0..points.len())
-            .filter(live)
-            .map(|k| (points.position[k] - intruder.centre_of_mass) / spec.scale)
+        offset: live
+            .iter()
+            .map(|&k| (points.position[k] - intruder.centre_of_mass) / spec.scale)
             .collect(),
-        velocity: (0..points.len())
-            .filter(live)
-            .map(|k| points.advection[k] * inverse)
+        velocity: live
+            .iter()
+            .map(|&k| points.advection[k] * inverse)
             .collect(),
     };
     if let Some(dir) = &dir.0 {
         let mut csv = String::from("t,x,y,dx,dy,ux,uy\n");
-        for (d, u) in field.offset.iter().zip(&field.velocity) {
-            let x = intruder.centre_of_mass + *d * spec.scale;
+        for ((&k, d), u) in live.iter().zip(&field.offset).zip(&field.velocity) {
+            let x = points.position[k];
             csv.push_str(&format!(
                 "{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
                 clock.time, x.x, x.y, d.x, d.y, u.x, u.y
             ));
         }
-        let path = dir.join(format!("flow_field_{k}.csv"));
+        let path = dir.join(format!("flow_field_{index}.csv"));
         write_or_fault(&path, csv.as_bytes(), &clock, &faults);
     }
     fields.fields.push(field);
