@@ -118,8 +118,11 @@ impl Interval {
     }
 
     /// Re-aligns with a run resumed at `time`: the next output is the first after it.
-    pub fn resume(&mut self, time: f64) {
-        self.next = ((time / self.every + 1e-9).floor() + 1.0) * self.every;
+    /// Returns how many outputs the interrupted run wrote (t = 0 included).
+    pub fn resume(&mut self, time: f64) -> usize {
+        let done = (time / self.every + 1e-9).floor() + 1.0;
+        self.next = done * self.every;
+        done as usize
     }
 }
 
@@ -159,8 +162,10 @@ impl Instants {
         self.next
     }
 
-    pub fn resume(&mut self, time: f64) {
+    /// Re-aligns with a run resumed at `time`; returns how many listed times had passed.
+    pub fn resume(&mut self, time: f64) -> usize {
         self.next = self.times.iter().filter(|&&t| t < time).count();
+        self.next
     }
 }
 

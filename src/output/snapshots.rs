@@ -68,14 +68,8 @@ impl Output for Snapshots {
     fn resume(&self, world: &mut World, time: f64) {
         let mut clock = world.resource_mut::<SnapshotClock>();
         clock.count = match &mut clock.when {
-            When::Every(interval) => {
-                interval.resume(time);
-                (time / interval.every + 1e-9).floor() as usize + 1
-            }
-            When::At(instants) => {
-                instants.resume(time);
-                instants.done()
-            }
+            When::Every(interval) => interval.resume(time),
+            When::At(instants) => instants.resume(time),
         };
     }
 }
