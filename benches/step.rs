@@ -8,6 +8,7 @@ use regolith::integration::CpdiFixed;
 use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::sim::on_worker;
+use regolith::step::locate_points;
 use regolith::step::transfer::{grid_to_particle, particle_to_grid};
 use regolith::{Regolith, Scene, Simulation};
 
@@ -29,23 +30,14 @@ fn systems(c: &mut Criterion) {
         sim.step().unwrap();
     }
     let world = &mut sim.world;
-    c.bench_function("p2g_cpdi_30k", |b| {
-        b.iter(|| {
-            on_worker(|| {
-                world
-                    .run_system_once(particle_to_grid::<CpdiFixed>)
-                    .unwrap()
-            })
-        })
+    c.bench_function("locate_cpdi_30k", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(locate_points::<CpdiFixed>).unwrap()))
     });
-    c.bench_function("g2p_cpdi_usl_30k", |b| {
-        b.iter(|| {
-            on_worker(|| {
-                world
-                    .run_system_once(grid_to_particle::<CpdiFixed>)
-                    .unwrap()
-            })
-        })
+    c.bench_function("p2g_30k", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(particle_to_grid).unwrap()))
+    });
+    c.bench_function("g2p_usl_30k", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(grid_to_particle).unwrap()))
     });
     c.bench_function("constitutive_mui_30k", |b| {
         b.iter(|| on_worker(|| world.run_system_once(update_stress::<MuI>).unwrap()))

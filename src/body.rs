@@ -128,24 +128,94 @@ pub struct BodyState {
     pub retired: usize,
 }
 
-impl BodyState {
-    /// Mass-weighted sums over the body's points.
-    pub fn measure(points: &Points) -> BodyState {
-        let mut s = BodyState::default();
-        let mut moment = DVec2::ZERO;
-        let mut momentum = DVec2::ZERO;
-        for k in 0..points.len() {
+/// Points per chunk of the whole-body sums. Sums run chunk by chunk and the chunks are
+/// combined in order, so the parallel survey of the Diagnostics set and a serial
+/// `BodyState::measure` give bitwise the same state whatever the thread count.
+pub const SURVEY_CHUNK: usize = 4096;
+
+/// Sums over one chunk of a body's points, and what the health check screens them for.
+#[derive(Clone, Copy, Debug)]
+pub struct ChunkSurvey {
+    mass: f64,
+    moment: DVec2,
+    momentum: DVec2,
+    kinetic_energy: f64,
+    max_speed: f64,
+    retired: usize,
+    /// Zero unless some position, velocity, stress or volume is NaN or infinite (or the
+    /// values are so large that their sum overflows).
+    pub non_finite: f64,
+    pub min_volume: f64,
+    /// Corners of the box around the chunk's points.
+    pub lowest: DVec2,
+    pub highest: DVec2,
+}
+
+impl Default for ChunkSurvey {
+    fn default() -> Self {
+        ChunkSurvey {
+            mass: 0.0,
+            moment: DVec2::ZERO,
+            momentum: DVec2::ZERO,
+            kinetic_energy: 0.0,
+            max_speed: 0.0,
+            retired: 0,
+            non_finite: 0.0,
+            min_volume: f64::INFINITY,
+            lowest: DVec2::INFINITY,
+            highest: DVec2::NEG_INFINITY,
+        }
+    }
+}
+
+impl ChunkSurvey {
+    /// The survey of points `range` (a range of at most `SURVEY_CHUNK` points).
+    pub fn over(points: &Points, range: std::ops::Range<usize>) -> ChunkSurvey {
+        let mut s = ChunkSurvey::default();
+        for k in range {
+            let (x, v, t) = (points.position[k], points.velocity[k], points.stress[k]);
+            let vol = points.volume[k];
+            s.non_finite += (x.x + x.y + v.x + v.y + t.xx + t.yy + t.xy + t.zz + vol) * 0.0;
+            s.min_volume = s.min_volume.min(vol);
+            s.lowest = s.lowest.min(x);
+            s.highest = s.highest.max(x);
             let m = points.mass[k];
             if m == 0.0 {
                 s.retired += 1;
                 continue;
             }
-            let v = points.velocity[k];
             s.mass += m;
-            moment += m * points.position[k];
-            momentum += m * v;
+            s.moment += m * x;
+            s.momentum += m * v;
             s.kinetic_energy += 0.5 * m * v.length_squared();
             s.max_speed = s.max_speed.max(v.length());
+        }
+        s
+    }
+}
+
+impl BodyState {
+    /// Mass-weighted sums over the body's points (chunk by chunk, see `SURVEY_CHUNK`).
+    pub fn measure(points: &Points) -> BodyState {
+        let n = points.len();
+        let chunks: Vec<ChunkSurvey> = (0..n.div_ceil(SURVEY_CHUNK))
+            .map(|c| ChunkSurvey::over(points, c * SURVEY_CHUNK..((c + 1) * SURVEY_CHUNK).min(n)))
+            .collect();
+        BodyState::from_chunks(&chunks)
+    }
+
+    /// Combines chunk surveys, in order.
+    pub fn from_chunks(chunks: &[ChunkSurvey]) -> BodyState {
+        let mut s = BodyState::default();
+        let mut moment = DVec2::ZERO;
+        let mut momentum = DVec2::ZERO;
+        for c in chunks {
+            s.mass += c.mass;
+            moment += c.moment;
+            momentum += c.momentum;
+            s.kinetic_energy += c.kinetic_energy;
+            s.max_speed = s.max_speed.max(c.max_speed);
+            s.retired += c.retired;
         }
         if s.mass > 0.0 {
             s.centre_of_mass = moment / s.mass;

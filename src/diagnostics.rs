@@ -8,7 +8,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::body::{Body, BodyState, Points};
+use crate::body::{Body, BodyState, ChunkSurvey, Points, SURVEY_CHUNK};
 use crate::error::Fault;
 use crate::grid::GridGeometry;
 use crate::sim::{Clock, Gravity};
@@ -78,13 +78,6 @@ pub fn check_energy(
     }
 }
 
-/// Refreshes every body's centre of mass, velocity, kinetic energy and top speed.
-pub fn measure_bodies(mut bodies: Query<(&Points, &mut BodyState)>) {
-    for (points, mut state) in &mut bodies {
-        *state = BodyState::measure(points);
-    }
-}
-
 /// What is wrong with point `k`, if anything.
 fn point_problem(points: &Points, k: usize, grid: &GridGeometry) -> Option<String> {
     let x = points.position[k];
@@ -113,22 +106,49 @@ fn point_problem(points: &Points, k: usize, grid: &GridGeometry) -> Option<Strin
         .map(|(_, side)| format!("it left the domain through the {side} side"))
 }
 
-/// Records the first non-finite value or escaped point.
-pub fn check_health(
+/// Chunk surveys of a body's points, kept so that the survey allocates nothing per step.
+#[derive(Component, Clone, Debug, Default)]
+pub struct Surveys(Vec<ChunkSurvey>);
+
+/// Whether a chunk may hold a faulty point: the screen is exact (it flags every chunk that
+/// holds one), so only flagged chunks are searched point by point.
+fn suspect(s: &ChunkSurvey, grid: &GridGeometry) -> bool {
+    let (lo, hi) = (grid.origin, grid.max());
+    let outside = |a: usize| !grid.periodic[a] && (s.lowest[a] < lo[a] || s.highest[a] > hi[a]);
+    s.non_finite != 0.0 || s.min_volume <= 0.0 || outside(0) || outside(1)
+}
+
+/// Refreshes every body's centre of mass, velocity, kinetic energy and top speed, and
+/// records the first non-finite value, empty volume or escaped point. One parallel pass
+/// over fixed chunks does both (the sums are deterministic, see `body::SURVEY_CHUNK`).
+pub fn survey_bodies(
     clock: Res<Clock>,
     grid: Res<GridGeometry>,
     mut health: ResMut<Health>,
-    bodies: Query<(&Body, &Points)>,
+    mut bodies: Query<(&Body, &Points, &mut BodyState, &mut Surveys)>,
 ) {
-    if health.fault.is_some() {
-        return;
-    }
-    for (body, points) in &bodies {
-        let found = (0..points.len())
-            .into_par_iter()
-            .find_first(|&k| point_problem(points, k, &grid).is_some());
-        if let Some(k) = found {
-            let why = point_problem(points, k, &grid).unwrap_or_default();
+    for (body, points, mut state, mut surveys) in &mut bodies {
+        let n = points.len();
+        let chunk = |c: usize| c * SURVEY_CHUNK..((c + 1) * SURVEY_CHUNK).min(n);
+        surveys
+            .0
+            .resize(n.div_ceil(SURVEY_CHUNK), ChunkSurvey::default());
+        surveys
+            .0
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(c, s)| *s = ChunkSurvey::over(points, chunk(c)));
+        *state = BodyState::from_chunks(&surveys.0);
+        if health.fault.is_some() {
+            continue;
+        }
+        let faulty = surveys
+            .0
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| suspect(s, &grid))
+            .find_map(|(c, _)| chunk(c).find_map(|k| Some(k).zip(point_problem(points, k, &grid))));
+        if let Some((k, why)) = faulty {
             let x = points.position[k];
             health.fault = Some(Fault {
                 step: clock.step,
@@ -138,7 +158,6 @@ pub fn check_health(
                     body.name, x.x, x.y
                 ),
             });
-            return;
         }
     }
 }

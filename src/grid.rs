@@ -7,6 +7,8 @@
 use bevy_ecs::prelude::*;
 use glam::DVec2;
 
+use crate::integration::fast_floor;
+
 /// Cartesian grid of square cells covering the rectangular domain.
 ///
 /// Along an axis with periodic walls the last node column is identified with the first, so
@@ -42,6 +44,15 @@ impl GridGeometry {
     /// Position of node `(i, j)`.
     pub fn node_position(&self, i: usize, j: usize) -> DVec2 {
         self.origin + DVec2::new(i as f64, j as f64) * self.cell_size
+    }
+
+    /// Flat index of the cell holding `x` (clamped into the grid).
+    #[inline]
+    pub fn cell_of(&self, x: DVec2) -> usize {
+        let rel = (x - self.origin) / self.cell_size;
+        let i = (fast_floor(rel.x).max(0.0) as usize).min(self.cells[0] - 1);
+        let j = (fast_floor(rel.y).max(0.0) as usize).min(self.cells[1] - 1);
+        j * self.cells[0] + i
     }
 
     /// Upper corner of the domain.

@@ -17,7 +17,7 @@
 //! A point that is itself outside the domain is a fault caught by the diagnostics; here its
 //! coordinate is clamped so that indexing never leaves the grid.
 
-use glam::DVec2;
+use glam::{DMat2, DVec2};
 use serde::Deserialize;
 
 use crate::grid::GridGeometry;
@@ -121,82 +121,136 @@ impl Scheme for CpdiFixed {
     }
 }
 
-/// The nodes a point touches, with weights `S_ip` and gradients `grad S_ip` (per metre).
-#[derive(Clone, Copy, Debug)]
-pub struct Stencil {
-    pub len: usize,
-    pub node: [usize; 9],
-    pub weight: [f64; 9],
-    pub gradient: [DVec2; 9],
+/// The 3 x 3 nodes a point touches and their weights, as the tensor product of the two 1D
+/// rules: node `(kx, ky)` is `column[kx] + row[ky]` with weight `wx[kx] wy[ky]` and gradient
+/// `(gx[kx] wy[ky], wx[kx] gy[ky])`. All nine entries are always used: an entry with no node
+/// on the grid (past a non-periodic edge) has zero weight and gradient and points at the
+/// nearest node of its own row and column, so loops over a footprint have no branches and a
+/// band scatter never writes outside its own rows (`step::bands`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Footprint {
+    /// Node column of each x entry.
+    pub column: [u32; 3],
+    /// Flat index of the first node of each y entry's row.
+    pub row: [u32; 3],
+    pub wx: [f64; 3],
+    pub wy: [f64; 3],
+    /// `d wx / dx` and `d wy / dy`, per metre.
+    pub gx: [f64; 3],
+    pub gy: [f64; 3],
 }
 
-impl Stencil {
-    /// Builds the stencil of a point at `x` with half-width `a` (metres).
+impl Footprint {
+    /// Bytes per point of a cached footprint (for memory estimates).
+    pub const BYTES: usize = std::mem::size_of::<Footprint>();
+
+    /// The footprint of a point at `x` with half-width `a` (metres).
     #[inline]
-    pub fn new<S: Scheme>(grid: &GridGeometry, x: DVec2, a: f64) -> Stencil {
+    pub fn new<S: Scheme>(grid: &GridGeometry, x: DVec2, a: f64) -> Footprint {
         let rel = (x - grid.origin) / grid.cell_size;
         let alpha = a / grid.cell_size;
+        let inv_h = 1.0 / grid.cell_size;
         let ax = S::axis(rel.x, alpha, grid.cells[0], grid.periodic[0]);
         let ay = S::axis(rel.y, alpha, grid.cells[1], grid.periodic[1]);
-        let inv_h = 1.0 / grid.cell_size;
         let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
-        // Node index along each axis, or usize::MAX for an entry with no node or no weight.
-        let index = |w: &AxisWeights, nodes: usize, periodic: bool| {
-            let mut out = [usize::MAX; 3];
-            for (k, slot) in out.iter_mut().enumerate() {
-                if (w.w[k] != 0.0 || w.dw[k] != 0.0)
-                    && let Some(i) = node_on_axis(w.base + k as isize, nodes, periodic)
-                {
-                    *slot = i;
-                }
-            }
-            out
+        let mut f = Footprint {
+            wx: ax.w,
+            wy: ay.w,
+            gx: ax.dw.map(|d| d * inv_h),
+            gy: ay.dw.map(|d| d * inv_h),
+            ..Footprint::default()
         };
-        let ix = index(&ax, nx, grid.periodic[0]);
-        let iy = index(&ay, ny, grid.periodic[1]);
-        let mut s = Stencil {
-            len: 0,
-            node: [0; 9],
-            weight: [0.0; 9],
-            gradient: [DVec2::ZERO; 9],
-        };
-        for (ky, &jy) in iy.iter().enumerate() {
-            if jy == usize::MAX {
-                continue;
-            }
-            let row = jy * nx;
-            for (kx, &jx) in ix.iter().enumerate() {
-                if jx == usize::MAX {
-                    continue;
-                }
-                let w = ax.w[kx] * ay.w[ky];
-                let g = DVec2::new(ax.dw[kx] * ay.w[ky], ax.w[kx] * ay.dw[ky]) * inv_h;
-                if w == 0.0 && g == DVec2::ZERO {
-                    continue;
-                }
-                s.node[s.len] = row + jx;
-                s.weight[s.len] = w;
-                s.gradient[s.len] = g;
-                s.len += 1;
-            }
+        let inside = |w: &AxisWeights, nodes: usize| w.base >= 0 && (w.base as usize) + 2 < nodes;
+        if inside(&ax, nx) {
+            let b = ax.base as u32;
+            f.column = [b, b + 1, b + 2];
+        } else {
+            f.column = edge_axis(&mut f.wx, &mut f.gx, ax.base, nx, grid.periodic[0]);
         }
-        s
+        if inside(&ay, ny) {
+            let b = (ay.base as usize * nx) as u32;
+            let step = nx as u32;
+            f.row = [b, b + step, b + 2 * step];
+        } else {
+            let rows = edge_axis(&mut f.wy, &mut f.gy, ay.base, ny, grid.periodic[1]);
+            f.row = rows.map(|r| r * nx as u32);
+        }
+        f
     }
 
-    /// `(node, weight, gradient)` for each touched node.
+    /// Flat index of node `(kx, ky)`.
     #[inline]
+    pub fn node(&self, kx: usize, ky: usize) -> usize {
+        (self.column[kx] + self.row[ky]) as usize
+    }
+
+    /// `(node, weight, gradient)` for all nine entries (zero entries included).
     pub fn iter(&self) -> impl Iterator<Item = (usize, f64, DVec2)> + '_ {
-        (0..self.len).map(|k| (self.node[k], self.weight[k], self.gradient[k]))
+        (0..9).map(|e| {
+            let (kx, ky) = (e % 3, e / 3);
+            (
+                self.node(kx, ky),
+                self.wx[kx] * self.wy[ky],
+                DVec2::new(self.gx[kx] * self.wy[ky], self.wx[kx] * self.gy[ky]),
+            )
+        })
+    }
+
+    /// `sum_i S_i u_i`.
+    #[inline]
+    pub fn interpolate(&self, u: &[DVec2]) -> DVec2 {
+        let mut out = DVec2::ZERO;
+        for ky in 0..3 {
+            let mut along = DVec2::ZERO;
+            for kx in 0..3 {
+                along += self.wx[kx] * u[self.node(kx, ky)];
+            }
+            out += self.wy[ky] * along;
+        }
+        out
+    }
+
+    /// `sum_i S_i u_i` and `sum_i u_i (outer) grad S_i` in one pass over the nodes.
+    #[inline]
+    pub fn interpolate_with_gradient(&self, u: &[DVec2]) -> (DVec2, DMat2) {
+        let (mut value, mut dx, mut dy) = (DVec2::ZERO, DVec2::ZERO, DVec2::ZERO);
+        for ky in 0..3 {
+            let (mut along, mut along_dx) = (DVec2::ZERO, DVec2::ZERO);
+            for kx in 0..3 {
+                let v = u[self.node(kx, ky)];
+                along += self.wx[kx] * v;
+                along_dx += self.gx[kx] * v;
+            }
+            value += self.wy[ky] * along;
+            dx += self.wy[ky] * along_dx;
+            dy += self.gy[ky] * along;
+        }
+        (value, DMat2::from_cols(dx, dy))
     }
 }
 
-#[inline]
-fn node_on_axis(k: isize, nodes: usize, periodic: bool) -> Option<usize> {
-    if periodic {
-        Some(k.rem_euclid(nodes as isize) as usize)
-    } else if k >= 0 && (k as usize) < nodes {
-        Some(k as usize)
-    } else {
-        None
+/// Node indices along one axis for a footprint that reaches an edge: wrapped on a periodic
+/// axis; past a non-periodic edge the entry's weight and gradient are zeroed (they already
+/// are for both built-in schemes) and its index clamped onto the axis.
+fn edge_axis(
+    w: &mut [f64; 3],
+    g: &mut [f64; 3],
+    base: isize,
+    nodes: usize,
+    periodic: bool,
+) -> [u32; 3] {
+    let mut out = [0; 3];
+    for k in 0..3 {
+        let i = base + k as isize;
+        out[k] = if periodic {
+            i.rem_euclid(nodes as isize) as u32
+        } else if i >= 0 && (i as usize) < nodes {
+            i as u32
+        } else {
+            w[k] = 0.0;
+            g[k] = 0.0;
+            i.clamp(0, nodes as isize - 1) as u32
+        };
     }
+    out
 }

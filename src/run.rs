@@ -241,7 +241,9 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
         .iter()
         .zip(counts)
         .map(|(spec, n)| {
-            n * (crate::body::Points::BYTES_PER_POINT + spec.material.history_bytes())
+            n * (crate::body::Points::BYTES_PER_POINT
+                + crate::integration::Footprint::BYTES
+                + spec.material.history_bytes())
                 + nodes * GridField::bytes_per_node(normals)
                 + averaging
         })

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::contact::{self, Contact, ContactLaw};
-use crate::diagnostics::{EnergyLimit, Health};
+use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
@@ -16,7 +16,7 @@ use crate::output::trajectory::Trajectory;
 use crate::output::{OutputFaults, RunDir};
 use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Walls};
 use crate::step::{self, StepSet, Timings};
-use crate::step::{Bands, CellDilatation};
+use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
 
 /// Simulated time and the time-step bookkeeping.
@@ -186,6 +186,8 @@ impl Simulation {
                 field,
                 BodyState::default(),
                 Bands::default(),
+                Location::default(),
+                Surveys::default(),
             ));
             spec.material.attach(&mut entity, n);
             if scene.dilatation == Dilatation::CellAveraged {

@@ -113,3 +113,51 @@ fn steps_after_the_first_do_not_allocate() {
     });
     assert_eq!(during, 0, "{during} heap allocations in 50 steps");
 }
+
+/// The parallel survey of the Diagnostics set sums over fixed chunks in order, so the body
+/// state it leaves is bitwise what a serial `BodyState::measure` gives.
+#[test]
+fn the_parallel_survey_equals_the_serial_measure() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut sim = Simulation::new(&impact());
+        for _ in 0..30 {
+            sim.step().unwrap();
+        }
+        let bodies = sim.bodies();
+        for (body, state, n) in bodies {
+            assert!(n > regolith::body::SURVEY_CHUNK || body.name == "disc");
+            let serial = regolith::body::BodyState::measure(sim.points(&body.name).unwrap());
+            let bits = |s: &regolith::body::BodyState| {
+                [
+                    s.mass,
+                    s.centre_of_mass.x,
+                    s.centre_of_mass.y,
+                    s.velocity.x,
+                    s.velocity.y,
+                    s.kinetic_energy,
+                    s.max_speed,
+                ]
+                .map(f64::to_bits)
+            };
+            assert_eq!(bits(&state), bits(&serial), "body {}", body.name);
+        }
+    });
+}
+
+/// The health screen finds a non-finite value anywhere, here in the bed's last chunk.
+#[test]
+fn a_non_finite_stress_stops_the_run() {
+    let mut sim = Simulation::new(&impact());
+    sim.step().unwrap();
+    {
+        let mut bed = sim.points_mut("bed").unwrap();
+        let last = bed.len() - 1;
+        bed.stress[last].xy = f64::NAN;
+    }
+    let fault = sim.step().expect_err("a NaN stress must stop the run");
+    assert!(fault.message.contains("not finite"), "{fault}");
+}

@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::integration::{CpdiFixed, Linear, Scheme, Stencil};
+use regolith::integration::{CpdiFixed, Footprint, Linear, Scheme};
 
 fn grid(periodic: [bool; 2]) -> GridGeometry {
     GridGeometry {
@@ -29,7 +29,7 @@ struct Sums {
 }
 
 fn sums<S: Scheme>(g: &GridGeometry, x: DVec2, a: f64) -> Sums {
-    let st = Stencil::new::<S>(g, x, a);
+    let st = Footprint::new::<S>(g, x, a);
     let mut s = Sums {
         weight: 0.0,
         gradient: DVec2::ZERO,
@@ -138,9 +138,9 @@ fn cpdi_gradient_is_continuous_across_a_node() {
     let eps = 1e-9;
     let grad_of = |x: DVec2, cpdi: bool| {
         let st = if cpdi {
-            Stencil::new::<CpdiFixed>(&g, x, 0.0125)
+            Footprint::new::<CpdiFixed>(&g, x, 0.0125)
         } else {
-            Stencil::new::<Linear>(&g, x, 0.0125)
+            Footprint::new::<Linear>(&g, x, 0.0125)
         };
         st.iter()
             .find(|(n, _, _)| *n == g.index(8, 5))
@@ -157,4 +157,28 @@ fn cpdi_gradient_is_continuous_across_a_node() {
         linear_jump > 1.0,
         "linear gradient should jump, got {linear_jump}"
     );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(3000))]
+
+    /// Every footprint entry, zero or not, names a node on the grid in the rows from one below
+    /// the point's cell to two above (what the lock-free band scatter relies on). Entries
+    /// clamped at a non-periodic edge carry no weight: the unity tests above include them.
+    #[test]
+    fn footprints_stay_in_their_rows(fx in -0.01f64..1.01, fy in -0.01f64..1.01, ppc in 1usize..4) {
+        let g = grid([false, false]);
+        let a = 0.5 * g.cell_size / ppc as f64;
+        let x = g.origin + DVec2::new(fx, fy) * g.size();
+        let nx = g.nodes_along(0);
+        let row = (g.cell_of(x) / g.cells[0]) as isize;
+        for f in [Footprint::new::<Linear>(&g, x, a), Footprint::new::<CpdiFixed>(&g, x, a)] {
+            for (n, w, grad) in f.iter() {
+                prop_assert!(n < g.node_count(), "node {n} off the grid");
+                let r = (n / nx) as isize;
+                prop_assert!((row - 1..=row + 2).contains(&r), "row {r} for a point in cell row {row}");
+                prop_assert!(w.is_finite() && grad.is_finite());
+            }
+        }
+    }
 }

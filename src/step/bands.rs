@@ -12,57 +12,43 @@
 //! are even, so the last band then scatters alone in a third phase.
 
 use bevy_ecs::prelude::*;
-use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
-use crate::integration::fast_floor;
 
 /// Cell rows per band (at least 3, see the module docs).
 pub const BAND_ROWS: usize = 4;
 
-/// The points of one body bucketed by band (a counting sort, rebuilt before each scatter).
+/// The points of one body bucketed by band (a counting sort, rebuilt whenever they move).
 #[derive(Component, Clone, Debug, Default)]
 pub struct Bands {
     /// `start[b]..start[b + 1]` indexes `points` for band `b`.
     start: Vec<usize>,
     /// Point indices, ascending within each band.
     points: Vec<u32>,
-    /// Scratch: each point's band.
-    band_of: Vec<u32>,
     /// Scratch: the next free slot of each band while filling.
     cursor: Vec<usize>,
 }
 
-/// The cell row of position `x` (clamped into the grid).
-#[inline]
-fn cell_row(grid: &GridGeometry, x: DVec2) -> usize {
-    let rel = (x.y - grid.origin.y) / grid.cell_size;
-    (fast_floor(rel).max(0.0) as usize).min(grid.cells[1] - 1)
-}
-
 impl Bands {
-    /// Buckets `positions` by band; no allocation once the buffers have grown.
-    pub fn rebuild(&mut self, grid: &GridGeometry, positions: &[DVec2]) {
+    /// Buckets the points by band, given each point's cell; no allocation once the buffers
+    /// have grown.
+    pub fn rebuild(&mut self, grid: &GridGeometry, cells: &[u32]) {
         let count = grid.cells[1].div_ceil(BAND_ROWS);
+        let cells_per_band = (grid.cells[0] * BAND_ROWS) as u32;
         self.start.clear();
         self.start.resize(count + 1, 0);
-        self.band_of.resize(positions.len(), 0);
-        self.band_of
-            .par_iter_mut()
-            .zip(positions.par_iter())
-            .for_each(|(b, x)| *b = (cell_row(grid, *x) / BAND_ROWS) as u32);
-        for &b in &self.band_of {
-            self.start[b as usize + 1] += 1;
+        for &c in cells {
+            self.start[(c / cells_per_band) as usize + 1] += 1;
         }
         for b in 0..count {
             self.start[b + 1] += self.start[b];
         }
-        self.points.resize(positions.len(), 0);
+        self.points.resize(cells.len(), 0);
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.start[..count]);
-        for (p, &b) in self.band_of.iter().enumerate() {
-            let slot = &mut self.cursor[b as usize];
+        for (p, &c) in cells.iter().enumerate() {
+            let slot = &mut self.cursor[(c / cells_per_band) as usize];
             self.points[*slot] = p as u32;
             *slot += 1;
         }

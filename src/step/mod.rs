@@ -11,6 +11,7 @@
 
 mod bands;
 mod grid_update;
+mod locate;
 mod prepare;
 pub mod transfer;
 
@@ -25,6 +26,7 @@ use crate::sim::Clock;
 
 pub use bands::Bands;
 pub use grid_update::apply_walls;
+pub use locate::{Location, locate_points};
 pub use prepare::signal_speed;
 pub use transfer::CellDilatation;
 
@@ -186,8 +188,7 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
     schedule.add_systems(
         (
             prepare::advance_clock.run_if(stepping),
-            crate::diagnostics::measure_bodies,
-            crate::diagnostics::check_health,
+            crate::diagnostics::survey_bodies,
             crate::diagnostics::check_energy.run_if(stepping),
             prepare::decide_output,
         )
@@ -207,11 +208,15 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
 struct GradientSystems;
 
 fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
-    schedule.add_systems(transfer::particle_to_grid::<S>.in_set(StepSet::ParticleToGrid));
+    schedule.add_systems(
+        (locate_points::<S>, transfer::particle_to_grid)
+            .chain()
+            .in_set(StepSet::ParticleToGrid),
+    );
     match update {
         StressUpdate::Usl => {
             schedule.add_systems(
-                transfer::grid_to_particle::<S>
+                transfer::grid_to_particle
                     .in_set(StepSet::GridToParticle)
                     .in_set(GradientSystems),
             );
@@ -219,9 +224,9 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
         StressUpdate::Musl => {
             schedule.add_systems(
                 (
-                    transfer::musl_velocity::<S>,
-                    transfer::musl_remap::<S>,
-                    transfer::musl_gradient::<S>,
+                    transfer::musl_velocity,
+                    transfer::musl_remap,
+                    transfer::musl_gradient,
                 )
                     .chain()
                     .in_set(StepSet::GridToParticle)

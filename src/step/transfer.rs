@@ -12,30 +12,28 @@
 //! after the optional cell averaging of the dilatation (`dilatation`).
 
 use bevy_ecs::prelude::*;
-use glam::{DMat2, DVec2};
+use glam::DVec2;
 use rayon::prelude::*;
 
 use super::bands::{Bands, Shared};
 use super::grid_update::apply_walls;
+use super::locate::Location;
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
-use crate::integration::{Scheme, Stencil, fast_floor};
 use crate::scene::Wall;
 use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the
-/// field keeps normals, `g_i = sum m grad S`.
+/// field keeps normals, `g_i = sum m grad S`, from the footprints of `locate_points`.
 /// The scatter runs band by band in parallel without locks (see `bands`).
-pub fn particle_to_grid<S: Scheme>(
+pub fn particle_to_grid(
     grid: Res<GridGeometry>,
     gravity: Res<Gravity>,
-    mut bodies: Query<(&Points, &mut GridField, &mut Bands)>,
+    mut bodies: Query<(&Points, &Location, &mut GridField, &Bands)>,
 ) {
     let g = gravity.0;
-    let grid = &*grid;
-    for (points, mut field, mut bands) in &mut bodies {
+    for (points, location, mut field, bands) in &mut bodies {
         let field = &mut *field;
-        bands.rebuild(grid, &points.position);
         let normals = !field.mass_gradient.is_empty();
         let mass = Shared::new(&mut field.mass);
         let momentum = Shared::new(&mut field.momentum);
@@ -44,49 +42,34 @@ pub fn particle_to_grid<S: Scheme>(
         bands.for_each_phase(grid.periodic[1], |b| {
             for &p in bands.points(b) {
                 let p = p as usize;
-                let stencil = Stencil::new::<S>(grid, points.position[p], points.half_width[p]);
+                let f = &location.footprint[p];
                 let m = points.mass[p];
                 let mv = m * points.velocity[p];
+                let mg = m * g;
                 let vol = points.volume[p];
                 let t = points.stress[p];
-                for (n, w, grad) in stencil.iter() {
-                    // SAFETY: stencil nodes are in bounds, and bands scattering at the same
-                    // time touch disjoint node rows (bands module).
-                    unsafe {
-                        mass.add_at(n, w * m);
-                        momentum.add_at(n, w * mv);
-                        force.add_at(n, w * m * g - vol * t.traction(grad));
-                        if normals {
-                            gradient.add_at(n, m * grad);
+                // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
+                let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
+                for ky in 0..3 {
+                    for kx in 0..3 {
+                        let n = f.node(kx, ky);
+                        let w = f.wx[kx] * f.wy[ky];
+                        let (gx, gy) = (f.gx[kx] * f.wy[ky], f.wx[kx] * f.gy[ky]);
+                        // SAFETY: footprint nodes are in bounds, and bands scattering at the
+                        // same time touch disjoint node rows (bands module).
+                        unsafe {
+                            mass.add_at(n, w * m);
+                            momentum.add_at(n, w * mv);
+                            force.add_at(n, w * mg - gx * tx - gy * ty);
+                            if normals {
+                                gradient.add_at(n, m * DVec2::new(gx, gy));
+                            }
                         }
                     }
                 }
             }
         });
     }
-}
-
-/// `sum v_i (outer) grad S_ip`.
-#[inline]
-fn velocity_gradient(stencil: &Stencil, velocity: &[DVec2]) -> DMat2 {
-    let mut l = DMat2::ZERO;
-    for (n, _, grad) in stencil.iter() {
-        let v = velocity[n];
-        l += DMat2::from_cols(v * grad.x, v * grad.y);
-    }
-    l
-}
-
-/// Interpolated grid velocity and acceleration at a point.
-#[inline]
-fn interpolate(stencil: &Stencil, field: &GridField) -> (DVec2, DVec2) {
-    let mut v = DVec2::ZERO;
-    let mut a = DVec2::ZERO;
-    for (n, w, _) in stencil.iter() {
-        v += w * field.velocity[n];
-        a += w * field.acceleration[n];
-    }
-    (v, a)
 }
 
 /// FLIP velocity update blended with PIC by `flip`.
@@ -97,51 +80,47 @@ fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, flip: f64) -> D
 
 /// USL: FLIP velocity update, advection velocity and velocity gradient
 /// `L = sum v_i (outer) grad S`, in one pass.
-pub fn grid_to_particle<S: Scheme>(
-    grid: Res<GridGeometry>,
+pub fn grid_to_particle(
     clock: Res<Clock>,
     flip: Res<FlipRatio>,
-    mut bodies: Query<(&mut Points, &GridField)>,
+    mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
-    let (dt, flip, grid) = (clock.dt, flip.0, &*grid);
-    for (mut points, field) in &mut bodies {
+    let (dt, flip) = (clock.dt, flip.0);
+    for (mut points, location, field) in &mut bodies {
         let points = &mut *points;
-        points
-            .position
+        location
+            .footprint
             .par_iter()
-            .zip(points.half_width.par_iter())
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
             .zip(points.velocity_gradient.par_iter_mut())
-            .for_each(|((((x, &a), v), adv), l)| {
-                let stencil = Stencil::new::<S>(grid, *x, a);
-                let (v_grid, a_grid) = interpolate(&stencil, field);
+            .for_each(|(((f, v), adv), l)| {
+                let (v_grid, grad) = f.interpolate_with_gradient(&field.velocity);
+                let a_grid = f.interpolate(&field.acceleration);
                 *v = new_velocity(*v, v_grid, a_grid, dt, flip);
                 *adv = v_grid;
-                *l = velocity_gradient(&stencil, &field.velocity);
+                *l = grad;
             });
     }
 }
 
 /// MUSL pass 1: the FLIP velocity update; the advection velocity is kept for pass 3.
-pub fn musl_velocity<S: Scheme>(
-    grid: Res<GridGeometry>,
+pub fn musl_velocity(
     clock: Res<Clock>,
     flip: Res<FlipRatio>,
-    mut bodies: Query<(&mut Points, &GridField)>,
+    mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
-    let (dt, flip, grid) = (clock.dt, flip.0, &*grid);
-    for (mut points, field) in &mut bodies {
+    let (dt, flip) = (clock.dt, flip.0);
+    for (mut points, location, field) in &mut bodies {
         let points = &mut *points;
-        points
-            .position
+        location
+            .footprint
             .par_iter()
-            .zip(points.half_width.par_iter())
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
-            .for_each(|(((x, &a), v), adv)| {
-                let stencil = Stencil::new::<S>(grid, *x, a);
-                let (v_grid, a_grid) = interpolate(&stencil, field);
+            .for_each(|((f, v), adv)| {
+                let v_grid = f.interpolate(&field.velocity);
+                let a_grid = f.interpolate(&field.acceleration);
                 *v = new_velocity(*v, v_grid, a_grid, dt, flip);
                 *adv = v_grid;
             });
@@ -149,18 +128,21 @@ pub fn musl_velocity<S: Scheme>(
 }
 
 /// MUSL pass 2: nodal velocities from the updated point momenta, walls applied.
-pub fn musl_remap<S: Scheme>(
+pub fn musl_remap(
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
-    mut bodies: Query<(&Points, &mut GridField)>,
+    mut bodies: Query<(&Points, &Location, &mut GridField)>,
 ) {
-    for (points, mut field) in &mut bodies {
+    for (points, location, mut field) in &mut bodies {
         let field = &mut *field;
         field.momentum.fill(DVec2::ZERO);
-        for p in 0..points.len() {
-            let stencil = Stencil::new::<S>(&grid, points.position[p], points.half_width[p]);
-            let mv = points.mass[p] * points.velocity[p];
-            for (n, w, _) in stencil.iter() {
+        for (f, (&m, &v)) in location
+            .footprint
+            .iter()
+            .zip(points.mass.iter().zip(&points.velocity))
+        {
+            let mv = m * v;
+            for (n, w, _) in f.iter() {
                 field.momentum[n] += w * mv;
             }
         }
@@ -177,22 +159,13 @@ pub fn musl_remap<S: Scheme>(
 }
 
 /// MUSL pass 3: `L` from the remapped velocities.
-pub fn musl_gradient<S: Scheme>(
-    grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &GridField)>,
-) {
-    let grid = &*grid;
-    for (mut points, field) in &mut bodies {
-        let points = &mut *points;
-        points
-            .position
+pub fn musl_gradient(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
+    for (mut points, location, field) in &mut bodies {
+        location
+            .footprint
             .par_iter()
-            .zip(points.half_width.par_iter())
             .zip(points.velocity_gradient.par_iter_mut())
-            .for_each(|((x, &a), l)| {
-                let stencil = Stencil::new::<S>(grid, *x, a);
-                *l = velocity_gradient(&stencil, &field.velocity);
-            });
+            .for_each(|(f, l)| *l = f.interpolate_with_gradient(&field.velocity).1);
     }
 }
 
@@ -212,11 +185,12 @@ impl CellDilatation {
     }
 
     /// Per-cell sums of the points' volumes and of `value(k)`, band by band in parallel (a
-    /// cell lies in exactly one band, so bands never share a sum; `bands` must be current).
+    /// cell lies in exactly one band, so bands never share a sum; `bands` and `cell` must
+    /// be current).
     fn sum(
         &mut self,
-        grid: &GridGeometry,
         points: &Points,
+        cell: &[u32],
         bands: &Bands,
         value: impl Fn(usize) -> f64 + Sync,
     ) {
@@ -227,7 +201,7 @@ impl CellDilatation {
         bands.for_each(|b| {
             for &k in bands.points(b) {
                 let k = k as usize;
-                let c = cell_of(grid, points.position[k]);
+                let c = cell[k] as usize;
                 // SAFETY: cell indices are in bounds; band b alone owns the cells of its rows.
                 unsafe {
                     volume.add_at(c, points.volume[k]);
@@ -237,20 +211,11 @@ impl CellDilatation {
         });
     }
 
-    /// `sum value / sum V` of the cell holding `x`.
-    fn per_volume(&self, grid: &GridGeometry, x: DVec2) -> f64 {
-        let c = cell_of(grid, x);
+    /// `sum value / sum V` of cell `c`.
+    fn per_volume(&self, c: u32) -> f64 {
+        let c = c as usize;
         self.weighted[c] / self.volume[c]
     }
-}
-
-/// The cell a point lies in (clamped into the grid).
-#[inline]
-fn cell_of(grid: &GridGeometry, x: DVec2) -> usize {
-    let rel = (x - grid.origin) / grid.cell_size;
-    let i = (fast_floor(rel.x).max(0.0) as usize).min(grid.cells[0] - 1);
-    let j = (fast_floor(rel.y).max(0.0) as usize).min(grid.cells[1] - 1);
-    j * grid.cells[0] + i
 }
 
 /// Replaces each point's dilatation `tr L` by the volume-weighted mean over the points in
@@ -259,24 +224,22 @@ fn cell_of(grid: &GridGeometry, x: DVec2) -> usize {
 /// (docs/numerics.md); the cell mean removes it, as selective reduced integration does for
 /// finite elements.
 pub fn average_dilatation(
-    grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &mut CellDilatation, &Bands)>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation, &Bands, &Location)>,
 ) {
-    let grid = &*grid;
-    for (mut points, mut cells, bands) in &mut bodies {
+    for (mut points, mut cells, bands, location) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        // The points have not moved since the scatter built `bands`.
-        cells.sum(grid, points, bands, |k| {
+        // The points have not moved since `locate_points` found their cells.
+        cells.sum(points, &location.cell, bands, |k| {
             let l = points.velocity_gradient[k];
             points.volume[k] * (l.x_axis.x + l.y_axis.y)
         });
-        points
-            .position
+        location
+            .cell
             .par_iter()
             .zip(points.velocity_gradient.par_iter_mut())
-            .for_each(|(x, l)| {
-                let mean = cells.per_volume(grid, *x);
+            .for_each(|(&c, l)| {
+                let mean = cells.per_volume(c);
                 let shift = 0.5 * (mean - (l.x_axis.x + l.y_axis.y));
                 l.x_axis.x += shift;
                 l.y_axis.y += shift;
@@ -303,19 +266,19 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
 /// compressed (docs/numerics.md).
 pub fn cell_density(
     grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &mut CellDilatation, &mut Bands)>,
+    mut bodies: Query<(&mut Points, &mut CellDilatation, &mut Bands, &mut Location)>,
 ) {
     let grid = &*grid;
-    for (mut points, mut cells, mut bands) in &mut bodies {
+    for (mut points, mut cells, mut bands, mut location) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        bands.rebuild(grid, &points.position);
-        cells.sum(grid, points, &bands, |k| points.mass[k]);
-        points
-            .position
+        location.find_cells(grid, &points.position, &mut bands);
+        cells.sum(points, &location.cell, &bands, |k| points.mass[k]);
+        location
+            .cell
             .par_iter()
             .zip(points.density.par_iter_mut())
-            .for_each(|(x, rho)| *rho = cells.per_volume(grid, *x));
+            .for_each(|(&c, rho)| *rho = cells.per_volume(c));
     }
 }
 
