@@ -47,12 +47,19 @@ impl GridGeometry {
     }
 
     /// Flat index of the cell holding `x` (clamped into the grid).
-    #[inline]
     pub fn cell_of(&self, x: DVec2) -> usize {
-        let rel = (x - self.origin) / self.cell_size;
+        let [i, j] = self.cell_at(x, 1.0 / self.cell_size);
+        j * self.cells[0] + i
+    }
+
+    /// Column and row of the cell holding `x` (clamped into the grid), given `1/h` (loops
+    /// over many points pass it in: a division costs several multiplications).
+    #[inline]
+    pub fn cell_at(&self, x: DVec2, inv_h: f64) -> [usize; 2] {
+        let rel = (x - self.origin) * inv_h;
         let i = (fast_floor(rel.x).max(0.0) as usize).min(self.cells[0] - 1);
         let j = (fast_floor(rel.y).max(0.0) as usize).min(self.cells[1] - 1);
-        j * self.cells[0] + i
+        [i, j]
     }
 
     /// Upper corner of the domain.

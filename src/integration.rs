@@ -104,14 +104,14 @@ impl Scheme for CpdiFixed {
         if !periodic && base >= n {
             base = n - 1.0;
         }
-        let width = hi - lo;
+        let inv_width = 1.0 / (hi - lo);
         let mut w = [0.0; 3];
         let mut dw = [0.0; 3];
         for k in 0..3 {
             let node = base + k as f64;
             let (nl, nh) = (hat(lo - node), hat(hi - node));
             w[k] = 0.5 * (nl + nh);
-            dw[k] = (nh - nl) / width;
+            dw[k] = (nh - nl) * inv_width;
         }
         AxisWeights {
             base: base as isize,
@@ -147,9 +147,9 @@ impl Footprint {
     /// The footprint of a point at `x` with half-width `a` (metres).
     #[inline]
     pub fn new<S: Scheme>(grid: &GridGeometry, x: DVec2, a: f64) -> Footprint {
-        let rel = (x - grid.origin) / grid.cell_size;
-        let alpha = a / grid.cell_size;
         let inv_h = 1.0 / grid.cell_size;
+        let rel = (x - grid.origin) * inv_h;
+        let alpha = a * inv_h;
         let ax = S::axis(rel.x, alpha, grid.cells[0], grid.periodic[0]);
         let ay = S::axis(rel.y, alpha, grid.cells[1], grid.periodic[1]);
         let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));

@@ -31,24 +31,23 @@ pub struct Bands {
 }
 
 impl Bands {
-    /// Buckets the points by band, given each point's cell; no allocation once the buffers
+    /// Buckets the points by band, given each point's band; no allocation once the buffers
     /// have grown.
-    pub fn rebuild(&mut self, grid: &GridGeometry, cells: &[u32]) {
+    pub fn rebuild(&mut self, grid: &GridGeometry, band_of: &[u32]) {
         let count = grid.cells[1].div_ceil(BAND_ROWS);
-        let cells_per_band = (grid.cells[0] * BAND_ROWS) as u32;
         self.start.clear();
         self.start.resize(count + 1, 0);
-        for &c in cells {
-            self.start[(c / cells_per_band) as usize + 1] += 1;
+        for &b in band_of {
+            self.start[b as usize + 1] += 1;
         }
         for b in 0..count {
             self.start[b + 1] += self.start[b];
         }
-        self.points.resize(cells.len(), 0);
+        self.points.resize(band_of.len(), 0);
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.start[..count]);
-        for (p, &c) in cells.iter().enumerate() {
-            let slot = &mut self.cursor[(c / cells_per_band) as usize];
+        for (p, &b) in band_of.iter().enumerate() {
+            let slot = &mut self.cursor[b as usize];
             self.points[*slot] = p as u32;
             *slot += 1;
         }

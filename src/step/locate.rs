@@ -12,7 +12,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::bands::Bands;
+use super::bands::{BAND_ROWS, Bands};
 use crate::body::Points;
 use crate::grid::GridGeometry;
 use crate::integration::{Footprint, Scheme};
@@ -24,17 +24,26 @@ pub struct Location {
     pub footprint: Vec<Footprint>,
     /// The cell of each point's current position.
     pub cell: Vec<u32>,
+    /// The band of each point's current position (`bands`).
+    band: Vec<u32>,
 }
 
 impl Location {
     /// Finds the cells of `positions` and rebuckets `bands` by them.
     pub fn find_cells(&mut self, grid: &GridGeometry, positions: &[DVec2], bands: &mut Bands) {
+        let inv_h = 1.0 / grid.cell_size;
         self.cell.resize(positions.len(), 0);
+        self.band.resize(positions.len(), 0);
         self.cell
             .par_iter_mut()
+            .zip(self.band.par_iter_mut())
             .zip(positions.par_iter())
-            .for_each(|(c, x)| *c = grid.cell_of(*x) as u32);
-        bands.rebuild(grid, &self.cell);
+            .for_each(|((c, b), x)| {
+                let [i, j] = grid.cell_at(*x, inv_h);
+                *c = (j * grid.cells[0] + i) as u32;
+                *b = (j / BAND_ROWS) as u32;
+            });
+        bands.rebuild(grid, &self.band);
     }
 }
 
@@ -47,9 +56,7 @@ pub fn locate_points<S: Scheme>(
     for (points, mut location, mut bands) in &mut bodies {
         let location = &mut *location;
         location.find_cells(grid, &points.position, &mut bands);
-        location
-            .footprint
-            .resize(points.len(), Footprint::default());
+        location.footprint.resize(points.len(), Footprint::default());
         location
             .footprint
             .par_iter_mut()

@@ -337,7 +337,7 @@ pub fn advect_points(
                 }
                 let moved = grid.wrap(*x + dt * adv);
                 *x = moved.clamp(min, max);
-                *vol *= (dt * (l.x_axis.x + l.y_axis.y)).exp();
+                *vol *= exp_of_increment(dt * (l.x_axis.x + l.y_axis.y));
                 for a in 0..2 {
                     let (below, above) = (moved[a] < min[a], moved[a] > max[a]);
                     if (below && open[a][0]) || (above && open[a][1]) {
@@ -352,5 +352,33 @@ pub fn advect_points(
                     }
                 }
             });
+    }
+}
+
+/// `e^x` for the volume change of one step, which is small: below 1e-3 in magnitude the
+/// Taylor polynomial to `x^5` (truncation under `x^6/720 < 2e-21`, beneath f64 round-off),
+/// otherwise `exp`. The library call was 4% of a step.
+#[inline]
+fn exp_of_increment(x: f64) -> f64 {
+    if x.abs() < 1e-3 {
+        1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x * (1.0 / 120.0)))))
+    } else {
+        x.exp()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::exp_of_increment;
+
+    #[test]
+    fn the_short_exponential_matches_exp_to_round_off() {
+        let mut worst: f64 = 0.0;
+        for k in -20_000..=20_000 {
+            let x = k as f64 * 1.1e-7;
+            worst = worst.max((exp_of_increment(x) / x.exp() - 1.0).abs());
+        }
+        assert!(worst < 3e-16, "relative error {worst:e}");
+        assert_eq!(exp_of_increment(0.5), 0.5f64.exp());
     }
 }
