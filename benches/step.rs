@@ -4,7 +4,7 @@
 use bevy_ecs::system::RunSystemOnce;
 use criterion::{Criterion, criterion_group, criterion_main};
 use regolith::contact::frictional;
-use regolith::integration::CpdiFixed;
+use regolith::integration::{CpdiFixed, Footprint, Scheme};
 use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::sim::on_worker;
@@ -47,6 +47,36 @@ fn systems(c: &mut Criterion) {
     });
 }
 
+/// The footprints of 30 k points, serially: the shape-function cost without the
+/// parallel loop around it.
+fn footprints(c: &mut Criterion) {
+    let mut sim = Simulation::new(&scene("bench_contact", &[PS1]));
+    let grid = sim.grid().clone();
+    let points = sim.points("bed").unwrap().clone();
+    let mut out = vec![Footprint::default(); points.len()];
+    c.bench_function("footprints_cpdi_30k_serial", |b| {
+        b.iter(|| {
+            for ((f, x), &a) in out.iter_mut().zip(&points.position).zip(&points.half_width) {
+                *f = Footprint::new::<CpdiFixed>(&grid, *x, a);
+            }
+            std::hint::black_box(&out);
+        })
+    });
+    c.bench_function("axis_weights_cpdi_30k_serial", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for (x, &a) in points.position.iter().zip(&points.half_width) {
+                let rel = (*x - grid.origin) / grid.cell_size;
+                let al = a / grid.cell_size;
+                let ax = CpdiFixed::axis(rel.x, al, grid.cells[0], false);
+                let ay = CpdiFixed::axis(rel.y, al, grid.cells[1], false);
+                acc += ax.w[1] + ay.dw[2] + ax.base as f64;
+            }
+            std::hint::black_box(acc);
+        })
+    });
+}
+
 fn steps(c: &mut Criterion) {
     for (label, name, sets) in [
         (
@@ -62,5 +92,5 @@ fn steps(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, systems, steps);
+criterion_group!(benches, footprints, systems, steps);
 criterion_main!(benches);

@@ -126,7 +126,10 @@ pub struct ContactScratch {
     sharing: Vec<u8>,
     mass: Vec<f64>,
     momentum: Vec<DVec2>,
-    /// Per body and node (`body * nodes + node`): the state read and the impulse to apply.
+    /// The nodes two or more bodies share (frictional law).
+    shared: Vec<usize>,
+    /// Per body and shared node (`body * shared + k`): the state read and the impulse to
+    /// apply.
     state: Vec<NodeBody>,
     present: Vec<bool>,
     impulse: Vec<DVec2>,
@@ -201,13 +204,27 @@ pub fn frictional(
     let s = &mut *scratch;
     let nodes = bodies.iter().next().map_or(0, |(_, f)| f.mass.len());
     let count = bodies.iter().count();
+    // The nodes two or more bodies share: the only ones the law acts on, a few hundred
+    // against the whole grid, so only they are read into the scratch.
+    s.sharing.clear();
+    s.sharing.resize(nodes, 0);
+    for (_, f) in bodies.iter() {
+        for (sharing, &m) in s.sharing.iter_mut().zip(&f.mass) {
+            if m > f.mass_tolerance {
+                *sharing = sharing.saturating_add(1);
+            }
+        }
+    }
+    s.shared.clear();
+    s.shared.extend((0..nodes).filter(|&n| s.sharing[n] >= 2));
+    let shared = s.shared.len();
     s.state.clear();
     s.present.clear();
     s.named.clear();
     for (body, f) in bodies.iter() {
         s.named
             .push(matches!(normal, NormalRule::Body(n) if *n == body.name));
-        for n in 0..nodes {
+        for &n in &s.shared {
             s.present.push(f.mass[n] > f.mass_tolerance);
             s.state.push(NodeBody {
                 mass: f.mass[n],
@@ -216,19 +233,17 @@ pub fn frictional(
             });
         }
     }
+    // Per body and shared node (`body * shared + k`).
     s.impulse.clear();
-    s.impulse.resize(count * nodes, DVec2::ZERO);
-    for n in 0..nodes {
+    s.impulse.resize(count * shared, DVec2::ZERO);
+    for k in 0..shared {
         s.at_node.clear();
         s.which.clear();
         for b in 0..count {
-            if s.present[b * nodes + n] {
-                s.at_node.push(s.state[b * nodes + n]);
+            if s.present[b * shared + k] {
+                s.at_node.push(s.state[b * shared + k]);
                 s.which.push(b);
             }
-        }
-        if s.at_node.len() < 2 {
-            continue;
         }
         // A normal is undefined when the mass gradients nearly cancel: below a millionth
         // of the typical gradient magnitude m / h at this node.
@@ -238,12 +253,12 @@ pub fn frictional(
         s.out.resize(s.at_node.len(), DVec2::ZERO);
         frictional_impulses(&s.at_node, friction, reference, 1e-6 * scale, &mut s.out);
         for (&b, &impulse) in s.which.iter().zip(s.out.iter()) {
-            s.impulse[b * nodes + n] = impulse;
+            s.impulse[b * shared + k] = impulse;
         }
     }
     for (b, (_, mut f)) in bodies.iter_mut().enumerate() {
-        for n in 0..nodes {
-            let impulse = s.impulse[b * nodes + n];
+        for (k, &n) in s.shared.iter().enumerate() {
+            let impulse = s.impulse[b * shared + k];
             if impulse != DVec2::ZERO {
                 apply_impulse(&mut f, n, impulse, dt);
             }
