@@ -56,7 +56,9 @@ pub fn locate_points<S: Scheme>(
     for (points, mut location, mut bands) in &mut bodies {
         let location = &mut *location;
         location.find_cells(grid, &points.position, &mut bands);
-        location.footprint.resize(points.len(), Footprint::default());
+        location
+            .footprint
+            .resize(points.len(), Footprint::default());
         location
             .footprint
             .par_iter_mut()
