@@ -10,7 +10,7 @@ use std::process::ExitCode;
 use std::rc::Rc;
 use std::time::Duration;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::Regolith;
@@ -18,8 +18,9 @@ use crate::error::{Error, SceneError};
 use crate::output::summary::Summary;
 use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
-use crate::scene::{InitialStress, Scene, TimeStep};
+use crate::scene::{InitialStress, Preset, Scene, TimeStep};
 use crate::sim::{Clock, Simulation};
+use crate::study::{Study, run_study};
 use crate::sweep::{Sweep, run_sweep};
 
 #[derive(Parser)]
@@ -42,18 +43,14 @@ enum Command {
         /// Output directory (default: out/<scene name>/).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override a scene value, e.g. --set time.end=0.1 --set bodies.ball.velocity=(0,-3).
-        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
-        sets: Vec<String>,
+        #[command(flatten)]
+        settings: SceneArgs,
         /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
         /// Write checkpoint.bin every N steps (for `regolith resume`).
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         checkpoint_every: Option<u64>,
-        /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
-        #[arg(long)]
-        allow_unstable: bool,
         #[command(flatten)]
         record: RecordArgs,
     },
@@ -65,6 +62,18 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// Runs at once (default: the sweep's `jobs`, else the number of cores).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        jobs: Option<u64>,
+    },
+    /// Run an accuracy study: each knob moved alone from a baseline, errors against a named
+    /// reference run (resumable), writing study.csv, study.md and pareto.png.
+    Study {
+        /// The RON study file.
+        study: PathBuf,
+        /// Output directory (default: out/<study name>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Runs at once (default: the study's `jobs`, else the number of cores).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         jobs: Option<u64>,
     },
@@ -121,12 +130,41 @@ enum Command {
     /// Validate a scene and print the resolved setup without running it.
     Check {
         scene: PathBuf,
-        #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
-        sets: Vec<String>,
-        /// Accept a fixed time step above the CFL limit (sets time.allow_unstable).
-        #[arg(long)]
-        allow_unstable: bool,
+        #[command(flatten)]
+        settings: SceneArgs,
     },
+}
+
+/// How the command line changes a scene (run and check).
+#[derive(Args)]
+struct SceneArgs {
+    /// Override a scene value, e.g. --set time.end=0.1 --set bodies.ball.velocity=(0,-3).
+    #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
+    sets: Vec<String>,
+    /// Numerical preset: fast, paper or fine (docs/ACCURACY.md); --set still wins over it.
+    #[arg(long, value_parser = parse_preset)]
+    preset: Option<Preset>,
+    /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
+    #[arg(long)]
+    allow_unstable: bool,
+}
+
+impl SceneArgs {
+    /// The flags as scene overrides.
+    fn overrides(self) -> Vec<String> {
+        let mut sets = self.sets;
+        if self.allow_unstable {
+            sets.push("time.allow_unstable=true".to_string());
+        }
+        if let Some(p) = self.preset {
+            sets.push(format!("preset={p:?}"));
+        }
+        sets
+    }
+}
+
+fn parse_preset(name: &str) -> Result<Preset, String> {
+    Preset::parse(name).ok_or_else(|| format!("unknown preset `{name}` (fast, paper or fine)"))
 }
 
 /// The name of the output the recording flags add (registered by the Rerun plugin crate).
@@ -215,14 +253,6 @@ fn camel_case(name: &str) -> String {
 }
 
 /// `--allow-unstable` as the override it stands for.
-fn with_flags(sets: Vec<String>, allow_unstable: bool) -> Vec<String> {
-    let mut sets = sets;
-    if allow_unstable {
-        sets.push("time.allow_unstable=true".to_string());
-    }
-    sets
-}
-
 /// Parses the process arguments and runs the command with the plugins of `app`.
 pub fn main_with(app: Regolith) -> ExitCode {
     let cli = Cli::parse();
@@ -231,16 +261,15 @@ pub fn main_with(app: Regolith) -> ExitCode {
         Command::Run {
             scene,
             out,
-            sets,
+            settings,
             quiet,
             checkpoint_every,
-            allow_unstable,
             record,
         } => run(
             &registries,
             &scene,
             out,
-            &with_flags(sets, allow_unstable),
+            &settings.overrides(),
             quiet,
             CheckpointEvery(checkpoint_every),
             &record,
@@ -259,6 +288,9 @@ pub fn main_with(app: Regolith) -> ExitCode {
         ),
         Command::Sweep { sweep, out, jobs } => {
             run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
+        }
+        Command::Study { study, out, jobs } => {
+            run_study_command(&registries, &study, out, jobs.map(|j| j as usize))
         }
         Command::Fit {
             runs,
@@ -285,11 +317,7 @@ pub fn main_with(app: Regolith) -> ExitCode {
                 println!("{}", f.display());
             }
         }),
-        Command::Check {
-            scene,
-            sets,
-            allow_unstable,
-        } => check(&registries, &scene, &with_flags(sets, allow_unstable)),
+        Command::Check { scene, settings } => check(&registries, &scene, &settings.overrides()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -378,26 +406,51 @@ fn run_sweep_command(
 ) -> Result<(), Error> {
     let sweep = Sweep::load(path)?;
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sweep.name));
-    let shared: Registries = (**registries).clone();
     let runs = sweep.plan().len();
-    println!("{}: {runs} runs into {}", sweep.name, out.display());
-    let failed = run_sweep(
-        path,
-        &sweep,
-        &out,
-        jobs,
-        || Rc::new(shared.clone()),
-        |line: &str| println!("{line}"),
-    )?;
+    run_batch(path, &sweep.name, runs, &out, "sweep.csv", |report| {
+        run_sweep(path, &sweep, &out, jobs, shared(registries), report)
+    })
+}
+
+fn run_study_command(
+    registries: &Rc<Registries>,
+    path: &Path,
+    out: Option<PathBuf>,
+    jobs: Option<usize>,
+) -> Result<(), Error> {
+    let study = Study::load(path)?;
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&study.name));
+    let runs = study.plan().0.len();
+    run_batch(path, &study.name, runs, &out, "study.md", |report| {
+        run_study(path, &study, &out, jobs, shared(registries), report)
+    })
+}
+
+/// A maker of registries for batch threads (an `Rc` cannot cross threads; its contents can).
+fn shared(registries: &Rc<Registries>) -> impl Fn() -> Rc<Registries> + Sync + use<> {
+    let copy: Registries = (**registries).clone();
+    move || Rc::new(copy.clone())
+}
+
+/// Runs a batch (sweep or study), printing a line per run; an error if any run failed.
+fn run_batch(
+    path: &Path,
+    name: &str,
+    runs: usize,
+    out: &Path,
+    table: &str,
+    go: impl FnOnce(&(dyn Fn(&str) + Sync)) -> Result<usize, Error>,
+) -> Result<(), Error> {
+    println!("{name}: {runs} runs into {}", out.display());
+    let failed = go(&|line: &str| println!("{line}"))?;
     println!(
-        "{}: done, {failed} failed; table in {}",
-        sweep.name,
-        out.join("sweep.csv").display()
+        "{name}: done, {failed} failed; table in {}",
+        out.join(table).display()
     );
     if failed > 0 {
         return Err(Error::Scene(crate::error::SceneError::file(
             &path.display().to_string(),
-            format!("{failed} of {runs} runs failed (see sweep.csv)"),
+            format!("{failed} of {runs} runs failed (see {table})"),
         )));
     }
     Ok(())
@@ -524,6 +577,9 @@ fn check(registries: &Rc<Registries>, path: &Path, sets: &[String]) -> Result<()
         "integration: {:?}, FLIP fraction {}, contact: {contact}",
         scene.integration, scene.flip
     );
+    if let Some(p) = scene.preset {
+        println!("preset: {p:?} (its settings are in the lines above; --set wins over it)");
+    }
     let (dt, cfl) = sim.next_time_step();
     let rule = match scene.time.step {
         TimeStep::Fixed(dt) => format!("fixed dt = {dt:e} s"),

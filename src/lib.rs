@@ -34,6 +34,7 @@ pub mod shape;
 pub mod sim;
 pub mod step;
 pub mod stress;
+pub mod study;
 pub mod sweep;
 pub mod verify;
 

@@ -125,13 +125,13 @@ impl Sweep {
 }
 
 /// A run directory's `summary.json`, if it holds one that parses.
-fn read_summary(dir: &Path) -> Option<serde_json::Value> {
+pub(crate) fn read_summary(dir: &Path) -> Option<serde_json::Value> {
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
     serde_json::from_str(&text).ok()
 }
 
 /// Whether `summary` is of a completed run with exactly these overrides.
-fn is_completed(summary: &serde_json::Value, sets: &[String]) -> bool {
+pub(crate) fn is_completed(summary: &serde_json::Value, sets: &[String]) -> bool {
     let same = summary["overrides"].as_array().is_some_and(|o| {
         o.iter()
             .map(|v| v.as_str().unwrap_or(""))
@@ -146,7 +146,7 @@ fn completed(dir: &Path, sets: &[String]) -> bool {
 }
 
 /// One CSV field, quoted when it holds a comma or a quote.
-fn field(s: &str) -> String {
+pub(crate) fn field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -229,79 +229,117 @@ pub fn run_sweep(
         .unwrap_or(Path::new("."))
         .join(&sweep.scene);
     let runs = sweep.plan();
-    std::fs::create_dir_all(out)
-        .map_err(|e| Error::io(format!("cannot create {}", out.display()), e))?;
-    let pending: Vec<usize> = (0..runs.len())
-        .filter(|&i| !completed(&out.join(&runs[i].dir), &runs[i].sets))
-        .collect();
-    let skipped = runs.len() - pending.len();
-    if skipped > 0 {
-        report(&format!(
-            "{skipped} of {} runs already completed, skipped",
-            runs.len()
-        ));
-    }
-    let errors = Mutex::new(Vec::new());
-    write_table(sweep, &runs, out, &[]).map_err(|e| Error::io("cannot write sweep.csv", e))?;
-    let next = AtomicUsize::new(0);
-    let jobs = jobs
-        .or(sweep.jobs)
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.min(pending.len().max(1)) {
-            scope.spawn(|| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(1)
-                    .build()
-                    .expect("a one-thread pool");
-                let registries = registries();
-                loop {
-                    let k = next.fetch_add(1, Ordering::SeqCst);
-                    let Some(&i) = pending.get(k) else { break };
-                    let run = &runs[i];
-                    let dir = out.join(&run.dir);
-                    let result = Scene::load(&scene_path, &run.sets, &registries)
-                        .map_err(Error::from)
-                        .and_then(|(scene, text)| {
-                            let from = Provenance {
-                                file: &scene_path.display().to_string(),
-                                text: &text,
-                                overrides: &run.sets,
-                            };
-                            pool.install(|| {
-                                run_scene(
-                                    &scene,
-                                    &from,
-                                    &dir,
-                                    CheckpointEvery(None),
-                                    &mut |_: &crate::sim::Clock| {},
-                                )
-                            })
-                        });
-                    let mut errors = errors.lock().expect("no run panics while holding the lock");
-                    match result {
-                        Ok(_) => report(&format!(
-                            "{}: completed ({})",
-                            run.dir,
-                            run.values.join(", ")
-                        )),
-                        Err(e) => {
-                            report(&format!(
-                                "{}: failed ({}): {e}",
+    let batch = Batch {
+        scene: &scene_path,
+        runs: &runs,
+        out,
+        jobs: jobs.or(sweep.jobs),
+    };
+    batch.run(registries, report, |errors| {
+        write_table(sweep, &runs, out, errors).map_err(|e| Error::io("cannot write sweep.csv", e))
+    })
+}
+
+/// Runs of one scene with different overrides, each in its own directory under `out`.
+pub(crate) struct Batch<'a> {
+    pub scene: &'a Path,
+    pub runs: &'a [Planned],
+    pub out: &'a Path,
+    /// Runs at once (default: the number of cores).
+    pub jobs: Option<usize>,
+}
+
+impl Batch<'_> {
+    /// Runs every run not already completed, `jobs` at once on one thread each; after each
+    /// (and once before any) calls `table` with the failures so far (index, message) so
+    /// that the caller's table is always current. Returns how many runs failed.
+    pub fn run(
+        &self,
+        registries: impl Fn() -> Rc<Registries> + Sync,
+        report: impl Fn(&str) + Sync,
+        table: impl Fn(&[(usize, String)]) -> Result<(), Error> + Sync,
+    ) -> Result<usize, Error> {
+        let (runs, out) = (self.runs, self.out);
+        std::fs::create_dir_all(out)
+            .map_err(|e| Error::io(format!("cannot create {}", out.display()), e))?;
+        let pending: Vec<usize> = (0..runs.len())
+            .filter(|&i| !completed(&out.join(&runs[i].dir), &runs[i].sets))
+            .collect();
+        let skipped = runs.len() - pending.len();
+        if skipped > 0 {
+            report(&format!(
+                "{skipped} of {} runs already completed, skipped",
+                runs.len()
+            ));
+        }
+        let errors = Mutex::new(Vec::new());
+        table(&[])?;
+        let next = AtomicUsize::new(0);
+        let jobs = self
+            .jobs
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1);
+        std::thread::scope(|scope| {
+            for _ in 0..jobs.min(pending.len().max(1)) {
+                scope.spawn(|| {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(1)
+                        .build()
+                        .expect("a one-thread pool");
+                    let registries = registries();
+                    loop {
+                        let k = next.fetch_add(1, Ordering::SeqCst);
+                        let Some(&i) = pending.get(k) else { break };
+                        let run = &runs[i];
+                        let result = self.run_one(run, &pool, &registries);
+                        let mut errors =
+                            errors.lock().expect("no run panics while holding the lock");
+                        match result {
+                            Ok(_) => report(&format!(
+                                "{}: completed ({})",
                                 run.dir,
                                 run.values.join(", ")
-                            ));
-                            errors.push((i, e.to_string()));
+                            )),
+                            Err(e) => {
+                                report(&format!(
+                                    "{}: failed ({}): {e}",
+                                    run.dir,
+                                    run.values.join(", ")
+                                ));
+                                errors.push((i, e.to_string()));
+                            }
+                        }
+                        if let Err(e) = table(&errors) {
+                            report(&e.to_string());
                         }
                     }
-                    if let Err(e) = write_table(sweep, &runs, out, &errors) {
-                        report(&format!("cannot write sweep.csv: {e}"));
-                    }
-                }
-            });
-        }
-    });
-    let failed = errors.into_inner().map(|e| e.len()).unwrap_or(0);
-    Ok(failed)
+                });
+            }
+        });
+        Ok(errors.into_inner().map(|e| e.len()).unwrap_or(0))
+    }
+
+    fn run_one(
+        &self,
+        run: &Planned,
+        pool: &rayon::ThreadPool,
+        registries: &Rc<Registries>,
+    ) -> Result<(), Error> {
+        let (scene, text) = Scene::load(self.scene, &run.sets, registries)?;
+        let from = Provenance {
+            file: &self.scene.display().to_string(),
+            text: &text,
+            overrides: &run.sets,
+        };
+        pool.install(|| {
+            run_scene(
+                &scene,
+                &from,
+                &self.out.join(&run.dir),
+                CheckpointEvery(None),
+                &mut |_: &crate::sim::Clock| {},
+            )
+        })
+        .map(|_| ())
+    }
 }

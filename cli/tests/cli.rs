@@ -137,6 +137,7 @@ fn user_errors_are_one_line_without_panic() {
             &["check", scene, "--set", "integration=Quadratic"],
             "Quadratic",
         ),
+        (&["check", scene, "--set", "preset=Quick"], "Quick"),
     ];
     for (args, expected) in cases {
         let o = regolith(args);

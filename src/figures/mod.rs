@@ -10,7 +10,7 @@
 //! (Fig. 10), the pressure space-time diagram with the p-wave line (Fig. 5), the normalised
 //! flow field ahead of the disc (Fig. 6) and splash snapshots (Fig. 7).
 
-mod plot;
+pub mod plot;
 
 use std::path::{Path, PathBuf};
 use std::rc::Rc;

@@ -153,6 +153,57 @@ pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> 
     root.present().map_err(fail)
 }
 
+/// A named point of a cost-error chart: name, wall time (s), relative error, on the frontier.
+pub type Labelled = (String, f64, f64, bool);
+
+/// Errors below this are drawn at it (a run equal to the reference has error zero).
+const ERROR_FLOOR: f64 = 1e-4;
+
+/// Relative error against wall time, both on log10 axes, each point named, the frontier
+/// points joined in order of cost.
+pub fn pareto(path: &Path, title: &str, points: &[Labelled]) -> Result<()> {
+    register_font()?;
+    let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
+    root.fill(&WHITE).map_err(fail)?;
+    let at = |w: f64, e: f64| (w.max(1e-3).log10(), e.max(ERROR_FLOOR).log10());
+    let xy: Vec<(f64, f64)> = points.iter().map(|p| at(p.1, p.2)).collect();
+    let (x0, x1) = bounds(xy.iter().map(|p| p.0), false);
+    let (y0, y1) = bounds(xy.iter().map(|p| p.1), false);
+    let ranges = ((x0 - 0.1, x1 + 0.25), (y0 - 0.1, y1 + 0.1));
+    let axes = (
+        "log10 wall time (s, one thread)",
+        "log10 relative error of final depth",
+    );
+    let mut chart = chart(&root, title, 16, ranges, axes)?;
+    let mut front: Vec<(f64, f64)> = points
+        .iter()
+        .zip(&xy)
+        .filter(|(p, _)| p.3)
+        .map(|(_, &q)| q)
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front, PALETTE[1].stroke_width(2)))
+        .map_err(fail)?
+        .label("frontier")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], PALETTE[1]));
+    for (p, &q) in points.iter().zip(&xy) {
+        let colour = if p.3 { PALETTE[1] } else { PALETTE[0] };
+        chart
+            .draw_series(std::iter::once(Circle::new(q, 5, colour.filled())))
+            .map_err(fail)?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                p.0.clone(),
+                (q.0 + 0.02, q.1),
+                ("sans-serif", 13),
+            )))
+            .map_err(fail)?;
+    }
+    legend(&mut chart)?;
+    root.present().map_err(fail)
+}
+
 /// A heat map of `values[row][col]` over `times` (x) and `radii` (y), with the line
 /// `r = speed t` drawn over it.
 pub fn space_time(

@@ -7,6 +7,9 @@
 
 mod check;
 mod overrides;
+mod preset;
+
+pub use preset::Preset;
 
 use std::path::Path;
 use std::rc::Rc;
@@ -57,6 +60,10 @@ pub struct Scene {
     /// Divergence bounds; see [`Limits`].
     #[serde(default)]
     pub limits: Limits,
+    /// Numerical preset (`Fast`, `Paper`, `Fine`) applied before the command line's
+    /// overrides; none by default (the scene's own settings).
+    #[serde(default)]
+    pub preset: Option<Preset>,
     /// Extra outputs (e.g. `Snapshots(every: 0.01)`); `summary.json` and `trajectory.csv`
     /// are always written.
     #[serde(default)]
@@ -260,18 +267,29 @@ impl Scene {
         registries: &Rc<Registries>,
     ) -> Result<(Scene, String), SceneError> {
         let origin = path.display().to_string();
-        let mut text = std::fs::read_to_string(path)
+        let written = std::fs::read_to_string(path)
             .map_err(|e| SceneError::file(&origin, format!("cannot read the scene: {e}")))?;
-        for s in sets {
-            text = overrides::set_in_text(&text, s)
-                .map_err(|e| SceneError::file(&format!("{origin} (--set {s})"), e))?;
-        }
-        let origin = if sets.is_empty() {
-            origin
-        } else {
-            format!("{origin} (after --set {})", sets.join(" --set "))
+        let apply = |sets: &[String]| {
+            let mut text = written.clone();
+            for s in sets {
+                text = overrides::set_in_text(&text, s)
+                    .map_err(|e| SceneError::file(&format!("{origin} (--set {s})"), e))?;
+            }
+            let origin = if sets.is_empty() {
+                origin.clone()
+            } else {
+                format!("{origin} (after --set {})", sets.join(" --set "))
+            };
+            Ok::<_, SceneError>((Scene::parse(&text, &origin, registries)?, text))
         };
-        Ok((Scene::parse(&text, &origin, registries)?, text))
+        let (scene, text) = apply(sets)?;
+        let Some(preset) = scene.preset else {
+            return Ok((scene, text));
+        };
+        // The preset's overrides go first so that explicit ones still win.
+        let mut all = preset.overrides(&scene);
+        all.extend(sets.iter().cloned());
+        apply(&all)
     }
 
     /// Adds an output written as scene text, e.g. `Rerun(file: "run.rrd")`, replacing any

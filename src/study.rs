@@ -1,0 +1,363 @@
+//! `regolith study STUDY.ron`: what each accuracy knob costs and what it buys.
+//!
+//! ```ron
+//! Study(
+//!     name: "impact_knobs",
+//!     scene: "../scenes/impact_tipped.ron",          // relative to the study file
+//!     set: ["time.end=0.4", "time.step=Cfl(0.5)"],   // the baseline: every run has these
+//!     reference: (label: "200 cells, CFL 0.2", set: ["domain.cells=(200, 200)"]),
+//!     knobs: [
+//!         (name: "cells", values: [
+//!             (label: "50", set: ["domain.cells=(50, 50)"]),
+//!             (label: "100", set: []),               // empty: the baseline itself
+//!         ]),
+//!     ],
+//!     jobs: 2,
+//! )
+//! ```
+//! One knob at a time moves away from the baseline (a full cross product of six knobs is
+//! hundreds of runs and says little more about each knob's price). Every run is compared with
+//! the reference, the finest run the study can afford, which the study names: the errors are
+//! `|x - x_ref| / |x_ref|` of final depth, stopping time and peak deceleration, and the cost
+//! is the run's wall time on one thread (runs go `jobs` at once, as in a sweep, and are
+//! skipped when already completed). Writes `study.csv`, `study.md` (the table, the reference
+//! named, the frontier marked) and `pareto.png` (depth error against wall time, the runs no
+//! other run beats on both joined up).
+
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use serde::Deserialize;
+
+use crate::error::{Error, SceneError};
+use crate::output::write_atomic;
+use crate::registry::Registries;
+use crate::sweep::{Batch, Planned, field, is_completed, read_summary};
+
+/// A study file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Study {
+    pub name: String,
+    /// The scene file, relative to the study file.
+    pub scene: String,
+    /// Overrides of the baseline, applied to every run (the reference included).
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// The finest affordable run, against which errors are measured.
+    pub reference: Setting,
+    /// The knobs, each moved alone from the baseline.
+    pub knobs: Vec<Knob>,
+    /// Runs at once (default: the number of cores).
+    #[serde(default)]
+    pub jobs: Option<usize>,
+}
+
+/// A labelled set of overrides.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Setting {
+    pub label: String,
+    #[serde(default)]
+    pub set: Vec<String>,
+}
+
+/// One knob and the values the study gives it.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Knob {
+    pub name: String,
+    pub values: Vec<Setting>,
+}
+
+/// One row of the study: a knob value and the run that measures it.
+#[derive(Clone, Debug)]
+pub struct Entry {
+    pub knob: String,
+    pub label: String,
+    /// Index into the planned runs (several entries may share the baseline run).
+    pub run: usize,
+}
+
+/// The measured quantities, in table order.
+const METRICS: [&str; 3] = ["final_depth", "stopping_time", "peak_deceleration"];
+
+impl Study {
+    pub fn load(path: &Path) -> Result<Study, SceneError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::file(&origin, format!("cannot read the study: {e}")))?;
+        let study: Study = crate::scene::ron_options().from_str(&text).map_err(|e| {
+            SceneError::at(
+                &origin,
+                e.span.start.line,
+                e.span.start.col,
+                e.code.to_string(),
+            )
+        })?;
+        if study.knobs.is_empty() || study.knobs.iter().any(|k| k.values.is_empty()) {
+            return Err(SceneError::file(
+                &origin,
+                "knobs needs at least one knob with at least one value",
+            ));
+        }
+        if study.jobs == Some(0) {
+            return Err(SceneError::file(&origin, "jobs must be at least 1"));
+        }
+        Ok(study)
+    }
+
+    /// The runs (the reference first, then the baseline, then each knob value that differs
+    /// from a run already planned) and the table's entries.
+    pub fn plan(&self) -> (Vec<Planned>, Vec<Entry>) {
+        let with = |extra: &[String]| {
+            let mut sets = self.set.clone();
+            sets.extend(extra.iter().cloned());
+            sets
+        };
+        let mut runs = vec![
+            Planned {
+                dir: "reference".into(),
+                values: vec!["reference".into(), self.reference.label.clone()],
+                sets: with(&self.reference.set),
+            },
+            Planned {
+                dir: "baseline".into(),
+                values: vec!["baseline".into(), String::new()],
+                sets: with(&[]),
+            },
+        ];
+        let mut entries = vec![Entry {
+            knob: "baseline".into(),
+            label: String::new(),
+            run: 1,
+        }];
+        for knob in &self.knobs {
+            for value in &knob.values {
+                let sets = with(&value.set);
+                let run = runs.iter().position(|r| r.sets == sets).unwrap_or_else(|| {
+                    runs.push(Planned {
+                        dir: format!("run_{:04}", runs.len() - 1),
+                        values: vec![knob.name.clone(), value.label.clone()],
+                        sets,
+                    });
+                    runs.len() - 1
+                });
+                entries.push(Entry {
+                    knob: knob.name.clone(),
+                    label: value.label.clone(),
+                    run,
+                });
+            }
+        }
+        (runs, entries)
+    }
+}
+
+/// What a completed run measured: wall time and the impact metrics.
+#[derive(Clone, Copy, Debug, Default)]
+struct Measured {
+    wall: Option<f64>,
+    metrics: [Option<f64>; 3],
+}
+
+fn measured(out: &Path, run: &Planned) -> (String, Measured) {
+    let Some(summary) = read_summary(&out.join(&run.dir)) else {
+        return ("pending".into(), Measured::default());
+    };
+    if !is_completed(&summary, &run.sets) {
+        let status = summary["status"].as_str().unwrap_or("pending").to_string();
+        return (status, Measured::default());
+    }
+    let m = Measured {
+        wall: summary["wall_s"].as_f64(),
+        metrics: METRICS.map(|k| summary["impact"][k].as_f64()),
+    };
+    ("completed".into(), m)
+}
+
+fn relative_error(x: Option<f64>, reference: Option<f64>) -> Option<f64> {
+    match (x, reference) {
+        (Some(x), Some(r)) if r != 0.0 => Some((x - r).abs() / r.abs()),
+        _ => None,
+    }
+}
+
+/// One finished row: the entry, its run's status and numbers, its errors.
+struct Row<'a> {
+    entry: &'a Entry,
+    run: &'a Planned,
+    status: String,
+    measured: Measured,
+    errors: [Option<f64>; 3],
+    frontier: bool,
+}
+
+/// Rows not beaten by another row on both wall time and depth error (ties kept).
+fn mark_frontier(rows: &mut [Row]) {
+    let cost_error: Vec<Option<(f64, f64)>> = rows
+        .iter()
+        .map(|r| r.measured.wall.zip(r.errors[0]))
+        .collect();
+    for (i, row) in rows.iter_mut().enumerate() {
+        let Some((w, e)) = cost_error[i] else {
+            continue;
+        };
+        row.frontier = !cost_error.iter().enumerate().any(|(j, other)| {
+            j != i && other.is_some_and(|(w2, e2)| w2 <= w && e2 <= e && (w2 < w || e2 < e))
+        });
+    }
+}
+
+fn number(x: Option<f64>, digits: usize) -> String {
+    x.map_or(String::new(), |v| format!("{v:.digits$}"))
+}
+
+fn percent(x: Option<f64>) -> String {
+    x.map_or(String::new(), |v| format!("{:.1}%", 100.0 * v))
+}
+
+/// Rewrites `study.csv`, `study.md` and (once the reference and one other run are in)
+/// `pareto.png` from the runs' summaries.
+fn write_tables(
+    study: &Study,
+    runs: &[Planned],
+    entries: &[Entry],
+    out: &Path,
+    failures: &[(usize, String)],
+) -> Result<(), Error> {
+    let (ref_status, reference) = measured(out, &runs[0]);
+    let mut rows: Vec<Row> = entries
+        .iter()
+        .map(|entry| {
+            let run = &runs[entry.run];
+            let (mut status, measured) = measured(out, run);
+            if failures.iter().any(|(i, _)| *i == entry.run) {
+                status = "failed".into();
+            }
+            let errors =
+                [0, 1, 2].map(|k| relative_error(measured.metrics[k], reference.metrics[k]));
+            Row {
+                entry,
+                run,
+                status,
+                measured,
+                errors,
+                frontier: false,
+            }
+        })
+        .collect();
+    mark_frontier(&mut rows);
+
+    let mut csv = String::from(
+        "knob,value,run,status,wall_s,final_depth,stopping_time,peak_deceleration,error_final_depth,error_stopping_time,error_peak_deceleration,on_frontier\n",
+    );
+    // The reference's errors are zero by definition, once it has run.
+    let zero = if ref_status == "completed" { "0" } else { "" };
+    let full = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
+    let reference_row = format!(
+        "reference,{},reference,{ref_status},{},{},{},{},{zero},{zero},{zero},\n",
+        field(&study.reference.label),
+        full(reference.wall),
+        full(reference.metrics[0]),
+        full(reference.metrics[1]),
+        full(reference.metrics[2]),
+    );
+    csv.push_str(&reference_row);
+    for r in &rows {
+        let mut line = vec![
+            field(&r.entry.knob),
+            field(&r.entry.label),
+            r.run.dir.clone(),
+            r.status.clone(),
+            full(r.measured.wall),
+        ];
+        line.extend(r.measured.metrics.iter().map(|&m| full(m)));
+        line.extend(r.errors.iter().map(|&e| full(e)));
+        line.push(r.frontier.to_string());
+        csv.push_str(&line.join(","));
+        csv.push('\n');
+    }
+    write_atomic(&out.join("study.csv"), csv.as_bytes())
+        .map_err(|e| Error::io("cannot write study.csv", e))?;
+
+    let mut md = format!(
+        "# Study {}\n\nScene `{}`, baseline overrides `{:?}`.\n\n**Reference** (the finest affordable run; errors are relative to it): {} (`{:?}`), {}: wall {} s, final depth {} m, stopping time {} s, peak deceleration {} m/s^2.\n\nWall time is one thread per run. * = on the frontier (no other run is both faster and closer in depth).\n\n| knob | value | run | status | wall (s) | depth (m) | stop (s) | peak decel. (m/s^2) | depth err | stop err | peak err | |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        study.name,
+        study.scene,
+        study.set,
+        study.reference.label,
+        study.reference.set,
+        ref_status,
+        number(reference.wall, 1),
+        number(reference.metrics[0], 4),
+        number(reference.metrics[1], 4),
+        number(reference.metrics[2], 1),
+    );
+    for r in &rows {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.entry.knob,
+            r.entry.label,
+            r.run.dir,
+            r.status,
+            number(r.measured.wall, 1),
+            number(r.measured.metrics[0], 4),
+            number(r.measured.metrics[1], 4),
+            number(r.measured.metrics[2], 1),
+            percent(r.errors[0]),
+            percent(r.errors[1]),
+            percent(r.errors[2]),
+            if r.frontier { "*" } else { "" },
+        ));
+    }
+    write_atomic(&out.join("study.md"), md.as_bytes())
+        .map_err(|e| Error::io("cannot write study.md", e))?;
+
+    let points: Vec<crate::figures::plot::Labelled> = rows
+        .iter()
+        .filter_map(|r| {
+            let (w, e) = r.measured.wall.zip(r.errors[0])?;
+            let name = if r.entry.label.is_empty() {
+                r.entry.knob.clone()
+            } else {
+                format!("{} {}", r.entry.knob, r.entry.label)
+            };
+            Some((name, w, e, r.frontier))
+        })
+        .collect();
+    if points.len() >= 2 {
+        let title = format!(
+            "{}: final-depth error vs wall time (reference: {})",
+            study.name, study.reference.label
+        );
+        crate::figures::plot::pareto(&out.join("pareto.png"), &title, &points)
+            .map_err(|e| Error::io("cannot draw pareto.png", std::io::Error::other(e)))?;
+    }
+    Ok(())
+}
+
+/// Runs the study into `out`; returns the number of failed runs.
+pub fn run_study(
+    study_path: &Path,
+    study: &Study,
+    out: &Path,
+    jobs: Option<usize>,
+    registries: impl Fn() -> Rc<Registries> + Sync,
+    report: impl Fn(&str) + Sync,
+) -> Result<usize, Error> {
+    let scene: PathBuf = study_path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(&study.scene);
+    let (runs, entries) = study.plan();
+    let batch = Batch {
+        scene: &scene,
+        runs: &runs,
+        out,
+        jobs: jobs.or(study.jobs),
+    };
+    batch.run(registries, report, |failures| {
+        write_tables(study, &runs, &entries, out, failures)
+    })
+}

@@ -1,0 +1,112 @@
+//! `regolith study`: a tiny study (coarse impact, a few steps) plans one run per distinct
+//! setting, measures every row against the named reference, marks the frontier, draws the
+//! plot, and skips finished runs when run again.
+
+mod common;
+
+use std::rc::Rc;
+use std::sync::Mutex;
+
+use regolith::Regolith;
+use regolith::study::{Study, run_study};
+
+fn write_study(dir: &std::path::Path) -> std::path::PathBuf {
+    let scene = common::scene_path("impact_tipped_coarse");
+    let text = format!(
+        r#"Study(
+    name: "tiny",
+    scene: "{}",
+    set: ["time.end=0.02", "domain.cells=(12, 12)"],
+    reference: (label: "20 cells, CFL 0.3", set: ["domain.cells=(20, 20)", "time.step=Cfl(0.3)"]),
+    knobs: [
+        (name: "cells", values: [(label: "12", set: []), (label: "16", set: ["domain.cells=(16, 16)"])]),
+        (name: "CFL", values: [(label: "0.5", set: []), (label: "0.3", set: ["time.step=Cfl(0.3)"])]),
+    ],
+    jobs: 2,
+)"#,
+        scene.display()
+    );
+    let path = dir.join("tiny.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The fields of one CSV line (fields with commas are quoted).
+fn split_csv(line: &str) -> Vec<String> {
+    let (mut fields, mut current, mut quoted) = (Vec::new(), String::new(), false);
+    for c in line.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ',' if !quoted => fields.push(std::mem::take(&mut current)),
+            _ => current.push(c),
+        }
+    }
+    fields.push(current);
+    fields
+}
+
+fn run(path: &std::path::Path, out: &std::path::Path) -> Vec<String> {
+    let study = Study::load(path).unwrap();
+    let registries = Regolith::default().registries();
+    let shared = (*registries).clone();
+    let lines = Mutex::new(Vec::new());
+    let failed = run_study(
+        path,
+        &study,
+        out,
+        Some(2),
+        || Rc::new(shared.clone()),
+        |l: &str| lines.lock().unwrap().push(l.to_string()),
+    )
+    .unwrap();
+    assert_eq!(failed, 0);
+    lines.into_inner().unwrap()
+}
+
+#[test]
+fn a_study_measures_each_knob_against_the_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_study(dir.path());
+    let study = Study::load(&path).unwrap();
+    let (runs, entries) = study.plan();
+    // reference, baseline, 16 cells, CFL 0.3: the empty settings share the baseline run.
+    assert_eq!(runs.len(), 4);
+    assert_eq!(entries.len(), 5);
+    assert!(entries.iter().filter(|e| e.run == 1).count() == 3);
+
+    let out = dir.path().join("out");
+    let first = run(&path, &out);
+    assert_eq!(first.len(), 4, "{first:?}");
+
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
+    assert_eq!(rows.len(), 1 + entries.len());
+    let reference = &rows[0];
+    assert_eq!(reference[0], "reference");
+    let depth_ref: f64 = reference[5].parse().unwrap();
+    for row in &rows[1..] {
+        assert_eq!(row[3], "completed", "{row:?}");
+        // The error column is |x - x_ref| / |x_ref| of the depth column.
+        let depth: f64 = row[5].parse().unwrap();
+        let error: f64 = row[8].parse().unwrap();
+        let expected = (depth - depth_ref).abs() / depth_ref.abs();
+        assert!(
+            (error - expected).abs() < 1e-12,
+            "{row:?}: {error} vs {expected}"
+        );
+    }
+    assert!(
+        rows.iter().any(|r| r[11] == "true"),
+        "no run on the frontier"
+    );
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(md.contains("**Reference**") && md.contains("20 cells, CFL 0.3"));
+    assert!(out.join("pareto.png").metadata().unwrap().len() > 1000);
+
+    // Run again: everything is already there.
+    let second = run(&path, &out);
+    assert!(
+        second.len() == 1 && second[0].contains("4 of 4 runs already completed"),
+        "{second:?}"
+    );
+}
