@@ -68,6 +68,11 @@ pub struct Setting {
 pub struct Knob {
     pub name: String,
     pub values: Vec<Setting>,
+    /// A change of the problem or the model (material law, contact law, impact speed)
+    /// rather than of the numerics: its difference from the reference is the change's
+    /// effect, not an error, so its runs are listed but kept off the frontier. Default false.
+    #[serde(default)]
+    pub model: bool,
 }
 
 /// One row of the study: a knob value and the run that measures it.
@@ -75,6 +80,8 @@ pub struct Knob {
 pub struct Entry {
     pub knob: String,
     pub label: String,
+    /// From a model knob (kept off the frontier).
+    pub model: bool,
     /// Index into the planned runs (several entries may share the baseline run).
     pub run: usize,
 }
@@ -130,14 +137,19 @@ impl Study {
         let mut entries = vec![Entry {
             knob: "baseline".into(),
             label: String::new(),
+            model: false,
             run: 1,
         }];
         for knob in &self.knobs {
             for value in &knob.values {
                 let sets = with(&value.set);
                 let run = runs.iter().position(|r| r.sets == sets).unwrap_or_else(|| {
+                    let mut dir = format!("{}_{}", slug(&knob.name), slug(&value.label));
+                    while runs.iter().any(|r| r.dir == dir) {
+                        dir.push('+');
+                    }
                     runs.push(Planned {
-                        dir: format!("run_{:04}", runs.len() - 1),
+                        dir,
                         values: vec![knob.name.clone(), value.label.clone()],
                         sets,
                     });
@@ -146,6 +158,7 @@ impl Study {
                 entries.push(Entry {
                     knob: knob.name.clone(),
                     label: value.label.clone(),
+                    model: knob.model,
                     run,
                 });
             }
@@ -154,10 +167,27 @@ impl Study {
     }
 }
 
-/// What a completed run measured: wall time and the impact metrics.
+/// A directory-safe form of a knob name or value: letters, digits and dots kept
+/// (lowercased), anything else a dash. Run directories are named after what they vary, so
+/// that editing the study file (adding a value, a knob) never renames a finished run.
+fn slug(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+/// What a completed run measured: its cost (wall time, and points x steps, which does
+/// not depend on the machine's load) and the impact metrics.
 #[derive(Clone, Copy, Debug, Default)]
 struct Measured {
     wall: Option<f64>,
+    particle_steps: Option<f64>,
     metrics: [Option<f64>; 3],
 }
 
@@ -171,6 +201,10 @@ fn measured(out: &Path, run: &Planned) -> (String, Measured) {
     }
     let m = Measured {
         wall: summary["wall_s"].as_f64(),
+        particle_steps: summary["steps"]
+            .as_f64()
+            .zip(summary["particles"].as_f64())
+            .map(|(s, p)| s * p),
         metrics: METRICS.map(|k| summary["impact"][k].as_f64()),
     };
     ("completed".into(), m)
@@ -193,11 +227,18 @@ struct Row<'a> {
     frontier: bool,
 }
 
-/// Rows not beaten by another row on both wall time and depth error (ties kept).
+/// Rows of numerical knobs not beaten by another such row on both wall time and depth
+/// error (ties kept).
 fn mark_frontier(rows: &mut [Row]) {
     let cost_error: Vec<Option<(f64, f64)>> = rows
         .iter()
-        .map(|r| r.measured.wall.zip(r.errors[0]))
+        .map(|r| {
+            if r.entry.model {
+                None
+            } else {
+                r.measured.wall.zip(r.errors[0])
+            }
+        })
         .collect();
     for (i, row) in rows.iter_mut().enumerate() {
         let Some((w, e)) = cost_error[i] else {
@@ -250,15 +291,16 @@ fn write_tables(
     mark_frontier(&mut rows);
 
     let mut csv = String::from(
-        "knob,value,run,status,wall_s,final_depth,stopping_time,peak_deceleration,error_final_depth,error_stopping_time,error_peak_deceleration,on_frontier\n",
+        "knob,value,run,status,wall_s,particle_steps,final_depth,stopping_time,peak_deceleration,error_final_depth,error_stopping_time,error_peak_deceleration,on_frontier\n",
     );
     // The reference's errors are zero by definition, once it has run.
     let zero = if ref_status == "completed" { "0" } else { "" };
     let full = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
     let reference_row = format!(
-        "reference,{},reference,{ref_status},{},{},{},{},{zero},{zero},{zero},\n",
+        "reference,{},reference,{ref_status},{},{},{},{},{},{zero},{zero},{zero},\n",
         field(&study.reference.label),
         full(reference.wall),
+        full(reference.particle_steps),
         full(reference.metrics[0]),
         full(reference.metrics[1]),
         full(reference.metrics[2]),
@@ -271,6 +313,7 @@ fn write_tables(
             r.run.dir.clone(),
             r.status.clone(),
             full(r.measured.wall),
+            full(r.measured.particle_steps),
         ];
         line.extend(r.measured.metrics.iter().map(|&m| full(m)));
         line.extend(r.errors.iter().map(|&e| full(e)));
@@ -282,7 +325,7 @@ fn write_tables(
         .map_err(|e| Error::io("cannot write study.csv", e))?;
 
     let mut md = format!(
-        "# Study {}\n\nScene `{}`, baseline overrides `{:?}`.\n\n**Reference** (the finest affordable run; errors are relative to it): {} (`{:?}`), {}: wall {} s, final depth {} m, stopping time {} s, peak deceleration {} m/s^2.\n\nWall time is one thread per run. * = on the frontier (no other run is both faster and closer in depth).\n\n| knob | value | run | status | wall (s) | depth (m) | stop (s) | peak decel. (m/s^2) | depth err | stop err | peak err | |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "# Study {}\n\nScene `{}`, baseline overrides `{:?}`.\n\n**Reference** (the finest affordable run; errors are relative to it): {} (`{:?}`), {}: wall {} s, final depth {} m, stopping time {} s, peak deceleration {} m/s^2.\n\nWall time is one thread per run, two runs at once; particle-steps (points x steps) is the cost without the machine's load. * = on the frontier (no other run of a numerical knob is both faster and closer in depth); model knobs (marked m) change the physics, so their difference from the reference is not an error and they are kept off the frontier.\n\n| knob | value | run | status | wall (s) | particle-steps | depth (m) | stop (s) | peak decel. (m/s^2) | depth err | stop err | peak err | |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
         study.name,
         study.scene,
         study.set,
@@ -296,19 +339,26 @@ fn write_tables(
     );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.entry.knob,
             r.entry.label,
             r.run.dir,
             r.status,
             number(r.measured.wall, 1),
+            r.measured
+                .particle_steps
+                .map_or(String::new(), |n| format!("{n:.2e}")),
             number(r.measured.metrics[0], 4),
             number(r.measured.metrics[1], 4),
             number(r.measured.metrics[2], 1),
             percent(r.errors[0]),
             percent(r.errors[1]),
             percent(r.errors[2]),
-            if r.frontier { "*" } else { "" },
+            match (r.frontier, r.entry.model) {
+                (true, _) => "*",
+                (false, true) => "m",
+                (false, false) => "",
+            },
         ));
     }
     write_atomic(&out.join("study.md"), md.as_bytes())
@@ -316,6 +366,7 @@ fn write_tables(
 
     let points: Vec<crate::figures::plot::Labelled> = rows
         .iter()
+        .filter(|r| !r.entry.model)
         .filter_map(|r| {
             let (w, e) = r.measured.wall.zip(r.errors[0])?;
             let name = if r.entry.label.is_empty() {

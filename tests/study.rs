@@ -21,6 +21,7 @@ fn write_study(dir: &std::path::Path) -> std::path::PathBuf {
     knobs: [
         (name: "cells", values: [(label: "12", set: []), (label: "16", set: ["domain.cells=(16, 16)"])]),
         (name: "CFL", values: [(label: "0.5", set: []), (label: "0.3", set: ["time.step=Cfl(0.3)"])]),
+        (name: "contact", model: true, values: [(label: "no-slip", set: ["contact=NoSlip"])]),
     ],
     jobs: 2,
 )"#,
@@ -69,26 +70,28 @@ fn a_study_measures_each_knob_against_the_reference() {
     let path = write_study(dir.path());
     let study = Study::load(&path).unwrap();
     let (runs, entries) = study.plan();
-    // reference, baseline, 16 cells, CFL 0.3: the empty settings share the baseline run.
-    assert_eq!(runs.len(), 4);
-    assert_eq!(entries.len(), 5);
+    // reference, baseline, 16 cells, CFL 0.3, no-slip: the empty settings share the baseline.
+    assert_eq!(runs.len(), 5);
+    assert_eq!(entries.len(), 6);
     assert!(entries.iter().filter(|e| e.run == 1).count() == 3);
 
     let out = dir.path().join("out");
     let first = run(&path, &out);
-    assert_eq!(first.len(), 4, "{first:?}");
+    assert_eq!(first.len(), 5, "{first:?}");
 
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     let rows: Vec<Vec<String>> = csv.lines().skip(1).map(split_csv).collect();
     assert_eq!(rows.len(), 1 + entries.len());
     let reference = &rows[0];
     assert_eq!(reference[0], "reference");
-    let depth_ref: f64 = reference[5].parse().unwrap();
+    let depth_ref: f64 = reference[6].parse().unwrap();
     for row in &rows[1..] {
         assert_eq!(row[3], "completed", "{row:?}");
+        // Particle-steps: points x steps, positive.
+        assert!(row[5].parse::<f64>().unwrap() > 0.0);
         // The error column is |x - x_ref| / |x_ref| of the depth column.
-        let depth: f64 = row[5].parse().unwrap();
-        let error: f64 = row[8].parse().unwrap();
+        let depth: f64 = row[6].parse().unwrap();
+        let error: f64 = row[9].parse().unwrap();
         let expected = (depth - depth_ref).abs() / depth_ref.abs();
         assert!(
             (error - expected).abs() < 1e-12,
@@ -96,9 +99,12 @@ fn a_study_measures_each_knob_against_the_reference() {
         );
     }
     assert!(
-        rows.iter().any(|r| r[11] == "true"),
-        "no run on the frontier"
+        rows.iter().any(|r| r[12] == "true"),
+        "no run on the frontier:\n{csv}"
     );
+    // A model knob is measured but never on the frontier.
+    let no_slip = rows.iter().find(|r| r[0] == "contact").unwrap();
+    assert_eq!(no_slip[12], "false");
     let md = std::fs::read_to_string(out.join("study.md")).unwrap();
     assert!(md.contains("**Reference**") && md.contains("20 cells, CFL 0.3"));
     assert!(out.join("pareto.png").metadata().unwrap().len() > 1000);
@@ -106,7 +112,7 @@ fn a_study_measures_each_knob_against_the_reference() {
     // Run again: everything is already there.
     let second = run(&path, &out);
     assert!(
-        second.len() == 1 && second[0].contains("4 of 4 runs already completed"),
+        second.len() == 1 && second[0].contains("5 of 5 runs already completed"),
         "{second:?}"
     );
 }
