@@ -141,7 +141,7 @@ struct SceneArgs {
     /// Override a scene value, e.g. --set time.end=0.1 --set bodies.ball.velocity=(0,-3).
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     sets: Vec<String>,
-    /// Numerical preset: fast, paper or fine (docs/ACCURACY.md); --set still wins over it.
+    /// Numerical preset: fast, accurate, fine or paper (docs/ACCURACY.md); --set wins over it.
     #[arg(long, value_parser = parse_preset)]
     preset: Option<Preset>,
     /// Run a fixed time step above the CFL limit anyway (sets time.allow_unstable).
@@ -164,7 +164,8 @@ impl SceneArgs {
 }
 
 fn parse_preset(name: &str) -> Result<Preset, String> {
-    Preset::parse(name).ok_or_else(|| format!("unknown preset `{name}` (fast, paper or fine)"))
+    Preset::parse(name)
+        .ok_or_else(|| format!("unknown preset `{name}` (fast, accurate, fine or paper)"))
 }
 
 /// The name of the output the recording flags add (registered by the Rerun plugin crate).

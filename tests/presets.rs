@@ -12,8 +12,9 @@ fn presets_set_the_studied_knobs_relative_to_the_scene() {
     assert_eq!(written.domain.cells, (100, 100));
     let cases = [
         ("Fast", (50, 50), 2, 0.5),
-        ("Paper", (100, 100), 2, 0.09),
+        ("Accurate", (100, 100), 2, 0.5),
         ("Fine", (100, 100), 3, 0.2),
+        ("Paper", (100, 100), 2, 0.09),
     ];
     for (name, cells, points, cfl) in cases {
         let s = common::scene(

@@ -172,7 +172,7 @@ pub fn pareto(path: &Path, title: &str, points: &[Labelled]) -> Result<()> {
     let ranges = ((x0 - 0.1, x1 + 0.25), (y0 - 0.1, y1 + 0.1));
     let axes = (
         "log10 wall time (s, one thread)",
-        "log10 relative error of final depth",
+        "log10 relative error (larger of final depth and stopping time)",
     );
     let mut chart = chart(&root, title, 16, ranges, axes)?;
     let mut front: Vec<(f64, f64)> = points
