@@ -32,7 +32,7 @@ use serde::Deserialize;
 use crate::error::{Error, SceneError};
 use crate::output::write_atomic;
 use crate::registry::Registries;
-use crate::sweep::{Batch, Planned, field, is_completed, read_summary};
+use crate::sweep::{Batch, Planned, field, is_completed, load_batch_file, read_summary};
 
 /// A study file.
 #[derive(Clone, Debug, Deserialize)]
@@ -91,25 +91,12 @@ const METRICS: [&str; 3] = ["final_depth", "stopping_time", "peak_deceleration"]
 
 impl Study {
     pub fn load(path: &Path) -> Result<Study, SceneError> {
-        let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::file(&origin, format!("cannot read the study: {e}")))?;
-        let study: Study = crate::scene::ron_options().from_str(&text).map_err(|e| {
-            SceneError::at(
-                &origin,
-                e.span.start.line,
-                e.span.start.col,
-                e.code.to_string(),
-            )
-        })?;
+        let (study, origin) = load_batch_file(path, "study", |s: &Study| s.jobs)?;
         if study.knobs.is_empty() || study.knobs.iter().any(|k| k.values.is_empty()) {
             return Err(SceneError::file(
                 &origin,
                 "knobs needs at least one knob with at least one value",
             ));
-        }
-        if study.jobs == Some(0) {
-            return Err(SceneError::file(&origin, "jobs must be at least 1"));
         }
         Ok(study)
     }

@@ -56,6 +56,30 @@ pub struct Varied {
     pub values: Vec<String>,
 }
 
+/// Reads and parses a batch file (a sweep or a study; `what` names it in messages) and
+/// checks its `jobs`; returns it with the file's name for further messages.
+pub(crate) fn load_batch_file<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    what: &str,
+    jobs: impl Fn(&T) -> Option<usize>,
+) -> Result<(T, String), SceneError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::file(&origin, format!("cannot read the {what}: {e}")))?;
+    let batch: T = crate::scene::ron_options().from_str(&text).map_err(|e| {
+        SceneError::at(
+            &origin,
+            e.span.start.line,
+            e.span.start.col,
+            e.code.to_string(),
+        )
+    })?;
+    if jobs(&batch) == Some(0) {
+        return Err(SceneError::file(&origin, "jobs must be at least 1"));
+    }
+    Ok((batch, origin))
+}
+
 /// One run of the sweep: its directory name and overrides.
 #[derive(Clone, Debug)]
 pub struct Planned {
@@ -66,25 +90,12 @@ pub struct Planned {
 
 impl Sweep {
     pub fn load(path: &Path) -> Result<Sweep, SceneError> {
-        let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::file(&origin, format!("cannot read the sweep: {e}")))?;
-        let sweep: Sweep = crate::scene::ron_options().from_str(&text).map_err(|e| {
-            SceneError::at(
-                &origin,
-                e.span.start.line,
-                e.span.start.col,
-                e.code.to_string(),
-            )
-        })?;
+        let (sweep, origin) = load_batch_file(path, "sweep", |s: &Sweep| s.jobs)?;
         if sweep.vary.is_empty() || sweep.vary.iter().any(|v| v.values.is_empty()) {
             return Err(SceneError::file(
                 &origin,
                 "vary needs at least one key with at least one value",
             ));
-        }
-        if sweep.jobs == Some(0) {
-            return Err(SceneError::file(&origin, "jobs must be at least 1"));
         }
         Ok(sweep)
     }
