@@ -398,6 +398,18 @@ pub fn run_study(
         .parent()
         .unwrap_or(Path::new("."))
         .join(&study.scene);
+    // The measures come from the scene's Impact output: refuse a scene without one before
+    // running anything.
+    let (base, _) = crate::scene::Scene::load(&scene, &study.set, &registries())?;
+    if !base.outputs.iter().any(|o| o.name() == "Impact") {
+        return Err(Error::Scene(SceneError::file(
+            &study_path.display().to_string(),
+            format!(
+                "the study's scene {} has no Impact output, which gives the measures a study compares (add outputs: [Impact(body: ..., surface: ...)])",
+                scene.display()
+            ),
+        )));
+    }
     let (runs, entries) = study.plan();
     let batch = Batch {
         scene: &scene,

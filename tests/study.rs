@@ -119,3 +119,32 @@ fn a_study_measures_each_knob_against_the_reference() {
         "{second:?}"
     );
 }
+
+/// A study of a scene without an Impact output is refused before anything runs.
+#[test]
+fn a_scene_without_impact_measures_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bar.ron");
+    let scene = common::scene_path("elastic_bar_vibration");
+    let text = format!(
+        r#"Study(name: "bar", scene: "{}", reference: (label: "fine", set: []), knobs: [(name: "cfl", values: [(label: "0.3", set: ["time.step=Cfl(0.3)"])])])"#,
+        scene.display()
+    );
+    std::fs::write(&path, text).unwrap();
+    let study = Study::load(&path).unwrap();
+    let registries = Regolith::default().registries();
+    let shared = (*registries).clone();
+    let out = dir.path().join("out");
+    let err = run_study(
+        &path,
+        &study,
+        &out,
+        Some(1),
+        || Rc::new(shared.clone()),
+        |_: &str| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("no Impact output"), "{err}");
+    assert!(!out.exists(), "nothing should have run");
+}
