@@ -215,11 +215,16 @@ pub fn frictional(
             }
         }
     }
+    // Capacity for the worst case (every node shared) up front: the number of shared nodes
+    // changes from step to step, and growing the buffers mid-run would allocate in a step.
     s.shared.clear();
+    s.shared.reserve(nodes);
     s.shared.extend((0..nodes).filter(|&n| s.sharing[n] >= 2));
     let shared = s.shared.len();
     s.state.clear();
+    s.state.reserve(count * nodes);
     s.present.clear();
+    s.present.reserve(count * nodes);
     s.named.clear();
     for (body, f) in bodies.iter() {
         s.named
@@ -235,6 +240,7 @@ pub fn frictional(
     }
     // Per body and shared node (`body * shared + k`).
     s.impulse.clear();
+    s.impulse.reserve(count * nodes);
     s.impulse.resize(count * shared, DVec2::ZERO);
     for k in 0..shared {
         s.at_node.clear();
