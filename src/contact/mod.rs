@@ -122,12 +122,13 @@ pub fn frictional_impulses(
 /// step allocates nothing once they have grown.
 #[derive(Default)]
 pub struct ContactScratch {
-    /// Per node: bodies above their mass tolerance, total mass, total momentum.
+    /// Per node: bodies above their mass tolerance there.
     sharing: Vec<u8>,
+    /// The nodes two or more bodies share: the only ones either law acts on.
+    shared: Vec<usize>,
+    /// Per shared node: total mass and momentum (no-slip law).
     mass: Vec<f64>,
     momentum: Vec<DVec2>,
-    /// The nodes two or more bodies share (frictional law).
-    shared: Vec<usize>,
     /// Per body and shared node (`body * shared + k`): the state read and the impulse to
     /// apply.
     state: Vec<NodeBody>,
@@ -140,6 +141,27 @@ pub struct ContactScratch {
     out: Vec<DVec2>,
 }
 
+impl ContactScratch {
+    /// Finds the nodes two or more bodies share (a few hundred against the whole grid) into
+    /// `shared`. Capacity for the worst case (every node shared) is reserved up front: the
+    /// count changes from step to step, and growing mid-run would allocate in a step.
+    fn find_shared<'a>(&mut self, fields: impl Iterator<Item = &'a GridField>, nodes: usize) {
+        self.sharing.clear();
+        self.sharing.resize(nodes, 0);
+        for f in fields {
+            for (sharing, &m) in self.sharing.iter_mut().zip(&f.mass) {
+                if m > f.mass_tolerance {
+                    *sharing = sharing.saturating_add(1);
+                }
+            }
+        }
+        self.shared.clear();
+        self.shared.reserve(nodes);
+        let sharing = &self.sharing;
+        self.shared.extend((0..nodes).filter(|&n| sharing[n] >= 2));
+    }
+}
+
 /// Adds the contact force that gives every body at a shared node the common velocity.
 pub fn no_slip(
     clock: Res<Clock>,
@@ -149,25 +171,25 @@ pub fn no_slip(
     let dt = clock.dt;
     let s = &mut *scratch;
     let nodes = fields.iter().next().map_or(0, |f| f.mass.len());
-    s.sharing.clear();
-    s.sharing.resize(nodes, 0);
+    s.find_shared(fields.iter(), nodes);
     s.mass.clear();
-    s.mass.resize(nodes, 0.0);
+    s.mass.reserve(nodes);
+    s.mass.resize(s.shared.len(), 0.0);
     s.momentum.clear();
-    s.momentum.resize(nodes, DVec2::ZERO);
+    s.momentum.reserve(nodes);
+    s.momentum.resize(s.shared.len(), DVec2::ZERO);
     for f in fields.iter() {
-        for n in 0..nodes {
+        for (k, &n) in s.shared.iter().enumerate() {
             if f.mass[n] > f.mass_tolerance {
-                s.sharing[n] = s.sharing[n].saturating_add(1);
-                s.mass[n] += f.mass[n];
-                s.momentum[n] += f.momentum[n];
+                s.mass[k] += f.mass[n];
+                s.momentum[k] += f.momentum[n];
             }
         }
     }
     for mut f in fields.iter_mut() {
-        for n in 0..nodes {
-            if s.sharing[n] >= 2 && f.mass[n] > f.mass_tolerance {
-                let v_cm = s.momentum[n] / s.mass[n];
+        for (k, &n) in s.shared.iter().enumerate() {
+            if f.mass[n] > f.mass_tolerance {
+                let v_cm = s.momentum[k] / s.mass[k];
                 let impulse = f.mass[n] * v_cm - f.momentum[n];
                 apply_impulse(&mut f, n, impulse, dt);
             }
@@ -204,22 +226,9 @@ pub fn frictional(
     let s = &mut *scratch;
     let nodes = bodies.iter().next().map_or(0, |(_, f)| f.mass.len());
     let count = bodies.iter().count();
-    // The nodes two or more bodies share: the only ones the law acts on, a few hundred
-    // against the whole grid, so only they are read into the scratch.
-    s.sharing.clear();
-    s.sharing.resize(nodes, 0);
-    for (_, f) in bodies.iter() {
-        for (sharing, &m) in s.sharing.iter_mut().zip(&f.mass) {
-            if m > f.mass_tolerance {
-                *sharing = sharing.saturating_add(1);
-            }
-        }
-    }
-    // Capacity for the worst case (every node shared) up front: the number of shared nodes
-    // changes from step to step, and growing the buffers mid-run would allocate in a step.
-    s.shared.clear();
-    s.shared.reserve(nodes);
-    s.shared.extend((0..nodes).filter(|&n| s.sharing[n] >= 2));
+    // Only the shared nodes are read into the scratch (capacity for all, as in
+    // `find_shared`).
+    s.find_shared(bodies.iter().map(|(_, f)| f), nodes);
     let shared = s.shared.len();
     s.state.clear();
     s.state.reserve(count * nodes);
