@@ -169,10 +169,20 @@ impl Default for ChunkSurvey {
 }
 
 impl ChunkSurvey {
-    /// The survey of points `range` (a range of at most `SURVEY_CHUNK` points).
-    pub fn over(points: &Points, range: std::ops::Range<usize>) -> ChunkSurvey {
+    /// How many chunks `points` points make.
+    pub fn count(points: usize) -> usize {
+        points.div_ceil(SURVEY_CHUNK)
+    }
+
+    /// The point indices of chunk `c` of `points` points.
+    pub fn range(c: usize, points: usize) -> std::ops::Range<usize> {
+        c * SURVEY_CHUNK..((c + 1) * SURVEY_CHUNK).min(points)
+    }
+
+    /// The survey of chunk `c` of the body's points.
+    pub fn over(points: &Points, c: usize) -> ChunkSurvey {
         let mut s = ChunkSurvey::default();
-        for k in range {
+        for k in ChunkSurvey::range(c, points.len()) {
             let (x, v, t) = (points.position[k], points.velocity[k], points.stress[k]);
             let vol = points.volume[k];
             s.non_finite += (x.x + x.y + v.x + v.y + t.xx + t.yy + t.xy + t.zz + vol) * 0.0;
@@ -197,15 +207,13 @@ impl ChunkSurvey {
 impl BodyState {
     /// Mass-weighted sums over the body's points (chunk by chunk, see `SURVEY_CHUNK`).
     pub fn measure(points: &Points) -> BodyState {
-        let n = points.len();
-        let chunks: Vec<ChunkSurvey> = (0..n.div_ceil(SURVEY_CHUNK))
-            .map(|c| ChunkSurvey::over(points, c * SURVEY_CHUNK..((c + 1) * SURVEY_CHUNK).min(n)))
-            .collect();
-        BodyState::from_chunks(&chunks)
+        BodyState::from_chunks(
+            (0..ChunkSurvey::count(points.len())).map(|c| ChunkSurvey::over(points, c)),
+        )
     }
 
     /// Combines chunk surveys, in order.
-    pub fn from_chunks(chunks: &[ChunkSurvey]) -> BodyState {
+    pub fn from_chunks(chunks: impl IntoIterator<Item = ChunkSurvey>) -> BodyState {
         let mut s = BodyState::default();
         let mut moment = DVec2::ZERO;
         let mut momentum = DVec2::ZERO;

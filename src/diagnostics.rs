@@ -8,7 +8,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::body::{Body, BodyState, ChunkSurvey, Points, SURVEY_CHUNK};
+use crate::body::{Body, BodyState, ChunkSurvey, Points};
 use crate::error::Fault;
 use crate::grid::GridGeometry;
 use crate::sim::{Clock, Gravity};
@@ -129,16 +129,15 @@ pub fn survey_bodies(
 ) {
     for (body, points, mut state, mut surveys) in &mut bodies {
         let n = points.len();
-        let chunk = |c: usize| c * SURVEY_CHUNK..((c + 1) * SURVEY_CHUNK).min(n);
         surveys
             .0
-            .resize(n.div_ceil(SURVEY_CHUNK), ChunkSurvey::default());
+            .resize(ChunkSurvey::count(n), ChunkSurvey::default());
         surveys
             .0
             .par_iter_mut()
             .enumerate()
-            .for_each(|(c, s)| *s = ChunkSurvey::over(points, chunk(c)));
-        *state = BodyState::from_chunks(&surveys.0);
+            .for_each(|(c, s)| *s = ChunkSurvey::over(points, c));
+        *state = BodyState::from_chunks(surveys.0.iter().copied());
         if health.fault.is_some() {
             continue;
         }
@@ -147,7 +146,9 @@ pub fn survey_bodies(
             .iter()
             .enumerate()
             .filter(|(_, s)| suspect(s, &grid))
-            .find_map(|(c, _)| chunk(c).find_map(|k| Some(k).zip(point_problem(points, k, &grid))));
+            .find_map(|(c, _)| {
+                ChunkSurvey::range(c, n).find_map(|k| Some(k).zip(point_problem(points, k, &grid)))
+            });
         if let Some((k, why)) = faulty {
             let x = points.position[k];
             health.fault = Some(Fault {
