@@ -184,16 +184,29 @@ impl Footprint {
         (self.column[kx] + self.row[ky]) as usize
     }
 
-    /// `(node, weight, gradient)` for all nine entries (zero entries included).
-    pub fn iter(&self) -> impl Iterator<Item = (usize, f64, DVec2)> + '_ {
-        (0..9).map(|e| {
-            let (kx, ky) = (e % 3, e / 3);
-            (
-                self.node(kx, ky),
-                self.wx[kx] * self.wy[ky],
-                DVec2::new(self.gx[kx] * self.wy[ky], self.wx[kx] * self.gy[ky]),
-            )
-        })
+    /// Calls `visit(node, weight, gradient)` for all nine entries (zero entries included),
+    /// row by row: the scatter's inner loop, written out so that it compiles to straight
+    /// code.
+    #[inline(always)]
+    pub fn for_each_entry(&self, mut visit: impl FnMut(usize, f64, DVec2)) {
+        for ky in 0..3 {
+            for kx in 0..3 {
+                let w = self.wx[kx] * self.wy[ky];
+                let grad = DVec2::new(self.gx[kx] * self.wy[ky], self.wx[kx] * self.gy[ky]);
+                visit(self.node(kx, ky), w, grad);
+            }
+        }
+    }
+
+    /// `(node, weight, gradient)` for all nine entries, in `for_each_entry`'s order.
+    pub fn iter(&self) -> impl Iterator<Item = (usize, f64, DVec2)> {
+        let mut entries = [(0, 0.0, DVec2::ZERO); 9];
+        let mut k = 0;
+        self.for_each_entry(|n, w, g| {
+            entries[k] = (n, w, g);
+            k += 1;
+        });
+        entries.into_iter()
     }
 
     /// `sum_i S_i u_i`.

@@ -50,23 +50,18 @@ pub fn particle_to_grid(
                 let t = points.stress[p];
                 // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
                 let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
-                for ky in 0..3 {
-                    for kx in 0..3 {
-                        let n = f.node(kx, ky);
-                        let w = f.wx[kx] * f.wy[ky];
-                        let (gx, gy) = (f.gx[kx] * f.wy[ky], f.wx[kx] * f.gy[ky]);
-                        // SAFETY: footprint nodes are in bounds, and bands scattering at the
-                        // same time touch disjoint node rows (bands module).
-                        unsafe {
-                            mass.add_at(n, w * m);
-                            momentum.add_at(n, w * mv);
-                            force.add_at(n, w * mg - gx * tx - gy * ty);
-                            if normals {
-                                gradient.add_at(n, m * DVec2::new(gx, gy));
-                            }
+                f.for_each_entry(|n, w, grad| {
+                    // SAFETY: footprint nodes are in bounds, and bands scattering at the same
+                    // time touch disjoint node rows (bands module).
+                    unsafe {
+                        mass.add_at(n, w * m);
+                        momentum.add_at(n, w * mv);
+                        force.add_at(n, w * mg - grad.x * tx - grad.y * ty);
+                        if normals {
+                            gradient.add_at(n, m * grad);
                         }
                     }
-                }
+                });
             }
         });
     }
@@ -142,9 +137,7 @@ pub fn musl_remap(
             .zip(points.mass.iter().zip(&points.velocity))
         {
             let mv = m * v;
-            for (n, w, _) in f.iter() {
-                field.momentum[n] += w * mv;
-            }
+            f.for_each_entry(|n, w, _| field.momentum[n] += w * mv);
         }
         for n in 0..field.mass.len() {
             let m = field.mass[n];
