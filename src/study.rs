@@ -24,7 +24,7 @@
 //! named, the frontier marked) and `pareto.png` (depth error against wall time, the runs no
 //! other run beats on both joined up).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::rc::Rc;
 
 use serde::Deserialize;
@@ -32,7 +32,7 @@ use serde::Deserialize;
 use crate::error::{Error, SceneError};
 use crate::output::write_atomic;
 use crate::registry::Registries;
-use crate::sweep::{Batch, Planned, field, is_completed, load_batch_file, read_summary};
+use crate::sweep::{Batch, Planned, beside, field, is_completed, load_batch_file, read_summary};
 
 /// A study file.
 #[derive(Clone, Debug, Deserialize)]
@@ -394,10 +394,7 @@ pub fn run_study(
     registries: impl Fn() -> Rc<Registries> + Sync,
     report: impl Fn(&str) + Sync,
 ) -> Result<usize, Error> {
-    let scene: PathBuf = study_path
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(&study.scene);
+    let scene = beside(study_path, &study.scene);
     // The measures come from the scene's Impact output: refuse a scene without one before
     // running anything.
     let (base, _) = crate::scene::Scene::load(&scene, &study.set, &registries())?;

@@ -235,10 +235,7 @@ pub fn run_sweep(
     registries: impl Fn() -> Rc<Registries> + Sync,
     report: impl Fn(&str) + Sync,
 ) -> Result<usize, Error> {
-    let scene_path: PathBuf = sweep_path
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(&sweep.scene);
+    let scene_path = beside(sweep_path, &sweep.scene);
     let runs = sweep.plan();
     let batch = Batch {
         scene: &scene_path,
@@ -249,6 +246,11 @@ pub fn run_sweep(
     batch.run(registries, report, |errors| {
         write_table(sweep, &runs, out, errors).map_err(|e| Error::io("cannot write sweep.csv", e))
     })
+}
+
+/// A path written in a batch file (its scene), taken relative to that file's directory.
+pub(crate) fn beside(file: &Path, relative: &str) -> PathBuf {
+    file.parent().unwrap_or(Path::new(".")).join(relative)
 }
 
 /// Runs of one scene with different overrides, each in its own directory under `out`.
