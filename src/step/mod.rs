@@ -209,7 +209,11 @@ struct GradientSystems;
 
 fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
     schedule.add_systems(
-        (locate_points::<S>, transfer::particle_to_grid)
+        (
+            locate_points::<S>,
+            transfer::average_stress_trace,
+            transfer::particle_to_grid,
+        )
             .chain()
             .in_set(StepSet::ParticleToGrid),
     );

@@ -26,13 +26,25 @@ use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the
 /// field keeps normals, `g_i = sum m grad S`, from the footprints of `locate_points`.
 /// The scatter runs band by band in parallel without locks (see `bands`).
+///
+/// With the cell-averaged dilatation the stress's in-plane trace is replaced by its cell
+/// mean (`average_stress_trace`) before it is scattered: that force is the exact conjugate
+/// of the averaged `tr L`, so the internal forces' power equals the stress power the points
+/// see (the B-bar pairing; SCIENCE.md). Without it the two differ wherever the trace varies
+/// within a cell, e.g. next to disconnected points, and the impact gains energy at small steps.
 pub fn particle_to_grid(
     grid: Res<GridGeometry>,
     gravity: Res<Gravity>,
-    mut bodies: Query<(&Points, &Location, &mut GridField, &Bands)>,
+    mut bodies: Query<(
+        &Points,
+        &Location,
+        &mut GridField,
+        &Bands,
+        Option<&CellDilatation>,
+    )>,
 ) {
     let g = gravity.0;
-    for (points, location, mut field, bands) in &mut bodies {
+    for (points, location, mut field, bands, cells) in &mut bodies {
         let field = &mut *field;
         let normals = !field.mass_gradient.is_empty();
         let mass = Shared::new(&mut field.mass);
@@ -47,7 +59,12 @@ pub fn particle_to_grid(
                 let mv = m * points.velocity[p];
                 let mg = m * g;
                 let vol = points.volume[p];
-                let t = points.stress[p];
+                let mut t = points.stress[p];
+                if let Some(cells) = cells {
+                    let shift = 0.5 * (cells.trace_mean[location.cell[p] as usize] - t.xx - t.yy);
+                    t.xx += shift;
+                    t.yy += shift;
+                }
                 // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
                 let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
                 f.for_each_entry(|n, w, grad| {
@@ -167,6 +184,8 @@ pub fn musl_gradient(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
 pub struct CellDilatation {
     volume: Vec<f64>,
     weighted: Vec<f64>,
+    /// Volume-weighted mean of `T_xx + T_yy` per cell, for the scatter.
+    trace_mean: Vec<f64>,
 }
 
 impl CellDilatation {
@@ -174,6 +193,7 @@ impl CellDilatation {
         CellDilatation {
             volume: vec![0.0; cells],
             weighted: vec![0.0; cells],
+            trace_mean: vec![0.0; cells],
         }
     }
 
@@ -208,6 +228,27 @@ impl CellDilatation {
     fn per_volume(&self, c: u32) -> f64 {
         let c = c as usize;
         self.weighted[c] / self.volume[c]
+    }
+}
+
+/// The cell means of the stress's in-plane trace `T_xx + T_yy` that the scatter uses in
+/// place of each point's own (the force conjugate to `average_dilatation`).
+pub fn average_stress_trace(mut bodies: Query<(&Points, &mut CellDilatation, &Bands, &Location)>) {
+    for (points, mut cells, bands, location) in &mut bodies {
+        let cells = &mut *cells;
+        cells.sum(points, &location.cell, bands, |k| {
+            let t = points.stress[k];
+            points.volume[k] * (t.xx + t.yy)
+        });
+        let CellDilatation {
+            volume,
+            weighted,
+            trace_mean,
+        } = cells;
+        trace_mean
+            .par_iter_mut()
+            .zip(volume.par_iter().zip(weighted.par_iter()))
+            .for_each(|(mean, (&v, &w))| *mean = if v > 0.0 { w / v } else { 0.0 });
     }
 }
 
