@@ -340,10 +340,13 @@ impl Simulation {
 
     /// Mutable points of the body called `name` (for tests that prescribe a state).
     pub fn points_mut(&mut self, name: &str) -> Option<Mut<'_, Points>> {
-        let mut q = self.world.query::<(&Body, &mut Points)>();
+        let mut q = self.world.query::<(&Body, &mut Points, &mut Location)>();
         q.iter_mut(&mut self.world)
-            .find(|(b, _)| b.name == name)
-            .map(|(_, p)| p)
+            .find(|(b, _, _)| b.name == name)
+            .map(|(_, p, mut location)| {
+                location.invalidate();
+                p
+            })
     }
 
     /// The nodal field of the body called `name`.

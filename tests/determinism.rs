@@ -96,6 +96,21 @@ fn one_and_two_threads_give_the_same_state() {
     );
 }
 
+/// The cells found after the move are reused by the next step; finding them again (what
+/// `points_mut` forces) must give the same state, bit for bit.
+#[test]
+fn reused_cells_equal_cells_found_again() {
+    let mut reused = Simulation::new(&impact());
+    let mut found = Simulation::new(&impact());
+    for _ in 0..100 {
+        reused.step().unwrap();
+        found.step().unwrap();
+        found.points_mut("bed").unwrap();
+        found.points_mut("disc").unwrap();
+    }
+    assert_eq!(state_hash(&mut reused), state_hash(&mut found));
+}
+
 #[test]
 fn steps_after_the_first_do_not_allocate() {
     // The path `Simulation::run` and `regolith run` take: the loop on a pool worker.

@@ -12,6 +12,7 @@
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
+use rayon::prelude::*;
 
 use crate::grid::{GridField, GridGeometry};
 use crate::scene::{Wall, Walls};
@@ -29,23 +30,33 @@ pub fn update_grid(
     for mut field in &mut fields {
         let field = &mut *field;
         let tol = field.mass_tolerance;
-        for n in 0..field.mass.len() {
-            let m = field.mass[n];
-            if m > tol {
-                let f = field.force[n];
-                field.momentum[n] += dt * f;
-                field.acceleration[n] = f / m;
-                field.velocity[n] = field.momentum[n] / m;
-            } else if m > 0.0 {
-                field.force[n] = m * g;
-                field.momentum[n] += dt * m * g;
-                field.acceleration[n] = g;
-                field.velocity[n] = field.momentum[n] / m;
-            } else {
-                field.acceleration[n] = DVec2::ZERO;
-                field.velocity[n] = DVec2::ZERO;
-            }
-        }
+        // Node by node, independent: parallel and bitwise the same for any thread count.
+        field
+            .mass
+            .par_iter()
+            .zip(field.momentum.par_iter_mut())
+            .zip(field.force.par_iter_mut())
+            .zip(
+                field
+                    .acceleration
+                    .par_iter_mut()
+                    .zip(field.velocity.par_iter_mut()),
+            )
+            .for_each(|(((&m, mv), f), (a, v))| {
+                if m > tol {
+                    *mv += dt * *f;
+                    *a = *f / m;
+                    *v = *mv / m;
+                } else if m > 0.0 {
+                    *f = m * g;
+                    *mv += dt * m * g;
+                    *a = g;
+                    *v = *mv / m;
+                } else {
+                    *a = DVec2::ZERO;
+                    *v = DVec2::ZERO;
+                }
+            });
         apply_walls(&grid, &walls.0, field, Some(dt));
     }
 }

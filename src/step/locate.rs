@@ -6,7 +6,8 @@
 //! MUSL's remap. Building it in each transfer was a third of the step (docs/BENCHMARKS.md).
 //! Each point's cell (for the band bucketing of the lock-free scatter and for the cell
 //! averages) is found here too, and found again once the points have moved when the cell
-//! averages need it (`transfer::cell_density`).
+//! averages need it (`transfer::cell_density`); the next step's `locate_points` then reuses
+//! those cells and bands instead of finding them again (the points do not move in between).
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
@@ -26,6 +27,10 @@ pub struct Location {
     pub cell: Vec<u32>,
     /// The band of each point's current position (`bands`).
     band: Vec<u32>,
+    /// `cell`, `band` and the body's `Bands` are those of the points' current positions:
+    /// set when the cells are found after the move, spent by the next `locate_points`, and
+    /// cleared by whoever hands out the positions for writing (`Simulation::points_mut`).
+    current: bool,
 }
 
 impl Location {
@@ -45,6 +50,22 @@ impl Location {
             });
         bands.rebuild(grid, &self.band);
     }
+
+    /// Finds the cells after the points moved; the next step's `locate_points` reuses them.
+    pub fn find_cells_after_move(
+        &mut self,
+        grid: &GridGeometry,
+        positions: &[DVec2],
+        bands: &mut Bands,
+    ) {
+        self.find_cells(grid, positions, bands);
+        self.current = true;
+    }
+
+    /// The positions may have changed outside the step: the cells must be found again.
+    pub fn invalidate(&mut self) {
+        self.current = false;
+    }
 }
 
 /// Rebuilds every body's footprints, cells and bands from the points' current positions.
@@ -55,7 +76,9 @@ pub fn locate_points<S: Scheme>(
     let grid = &*grid;
     for (points, mut location, mut bands) in &mut bodies {
         let location = &mut *location;
-        location.find_cells(grid, &points.position, &mut bands);
+        if !std::mem::take(&mut location.current) {
+            location.find_cells(grid, &points.position, &mut bands);
+        }
         location
             .footprint
             .resize(points.len(), Footprint::default());

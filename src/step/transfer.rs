@@ -30,7 +30,7 @@ use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 /// With the cell-averaged dilatation the stress's in-plane trace is replaced by its cell
 /// mean (`average_stress_trace`) before it is scattered: that force is the exact conjugate
 /// of the averaged `tr L`, so the internal forces' power equals the stress power the points
-/// see (the B-bar pairing; SCIENCE.md). Without it the two differ wherever the trace varies
+/// see (the B-bar pairing; docs/numerics.md). Without it the two differ wherever the trace varies
 /// within a cell, e.g. next to disconnected points, and the impact gains energy at small steps.
 pub fn particle_to_grid(
     grid: Res<GridGeometry>,
@@ -306,7 +306,7 @@ pub fn cell_density(
     for (mut points, mut cells, mut bands, mut location) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
-        location.find_cells(grid, &points.position, &mut bands);
+        location.find_cells_after_move(grid, &points.position, &mut bands);
         cells.sum(points, &location.cell, &bands, |k| points.mass[k]);
         location
             .cell
