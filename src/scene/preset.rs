@@ -1,7 +1,9 @@
 //! Numerical presets: `preset: Fast | Accurate | Fine | Paper` in any scene (or `--preset`).
-//! The first three are points on the speed-accuracy frontier measured by
-//! `studies/impact_knobs.ron` (docs/ACCURACY.md); `Paper` is the paper's own numerics,
-//! which that study found off the frontier (unphysical late in the impact).
+//! The first three are placed by the speed-accuracy study `studies/impact_knobs.ron`
+//! (docs/ACCURACY.md): `Accurate` is on its frontier, `Fast` next to it (the frontier's CFL
+//! 0.8 is nearer the stability limit and closer only by an error cancellation), `Fine` is its
+//! reference. `Paper` is the paper's own numerics: as accurate as `Accurate` at five times
+//! the cost.
 //!
 //! A preset sets the numerical knobs relative to the scene as written, so that a scene at
 //! the paper's resolution gets the study's settings: `Fast` halves the cells per axis, and
