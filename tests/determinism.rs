@@ -1,49 +1,14 @@
 //! The step is deterministic: the state after N steps is bitwise the same with 1 and 2
-//! threads (the parallel scatter never reorders a node's contributions), and no step after
-//! the first allocates on the heap.
+//! threads (the parallel scatter never reorders a node's contributions). That no step
+//! allocates is tested in `allocation.rs`, a binary of its own: its allocation counter is
+//! global, and other tests running beside it would count.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::collections::hash_map::DefaultHasher;
 use std::hash::Hasher;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-use regolith::{Scene, Simulation};
-
-/// Counts heap allocations (all threads).
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// The full model at a coarse resolution: a PS-1 bed, an elastic intruder, CPDI,
-/// frictional contact, cell-averaged dilatation.
-fn impact() -> Scene {
-    common::scene(
-        "bench_contact",
-        &[
-            "domain.cells=(40, 40)",
-            "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
-            "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)",
-        ],
-    )
-}
+use regolith::Simulation;
 
 fn state_hash(sim: &mut Simulation) -> u64 {
     let mut h = DefaultHasher::new();
@@ -78,7 +43,7 @@ fn run_with_threads(threads: usize, steps: usize) -> u64 {
         .build()
         .unwrap();
     pool.install(|| {
-        let mut sim = Simulation::new(&impact());
+        let mut sim = Simulation::new(&common::full_model_coarse());
         for _ in 0..steps {
             sim.step().unwrap();
         }
@@ -100,8 +65,8 @@ fn one_and_two_threads_give_the_same_state() {
 /// `points_mut` forces) must give the same state, bit for bit.
 #[test]
 fn reused_cells_equal_cells_found_again() {
-    let mut reused = Simulation::new(&impact());
-    let mut found = Simulation::new(&impact());
+    let mut reused = Simulation::new(&common::full_model_coarse());
+    let mut found = Simulation::new(&common::full_model_coarse());
     for _ in 0..100 {
         reused.step().unwrap();
         found.step().unwrap();
@@ -109,24 +74,6 @@ fn reused_cells_equal_cells_found_again() {
         found.points_mut("disc").unwrap();
     }
     assert_eq!(state_hash(&mut reused), state_hash(&mut found));
-}
-
-#[test]
-fn steps_after_the_first_do_not_allocate() {
-    // The path `Simulation::run` and `regolith run` take: the loop on a pool worker.
-    let during = regolith::sim::on_worker(|| {
-        let mut sim = Simulation::new(&impact());
-        // The first steps size every scratch buffer.
-        for _ in 0..3 {
-            sim.step().unwrap();
-        }
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
-        for _ in 0..50 {
-            sim.step().unwrap();
-        }
-        ALLOCATIONS.load(Ordering::Relaxed) - before
-    });
-    assert_eq!(during, 0, "{during} heap allocations in 50 steps");
 }
 
 /// The parallel survey of the Diagnostics set sums over fixed chunks in order, so the body
@@ -138,7 +85,7 @@ fn the_parallel_survey_equals_the_serial_measure() {
         .build()
         .unwrap();
     pool.install(|| {
-        let mut sim = Simulation::new(&impact());
+        let mut sim = Simulation::new(&common::full_model_coarse());
         for _ in 0..30 {
             sim.step().unwrap();
         }
@@ -166,7 +113,7 @@ fn the_parallel_survey_equals_the_serial_measure() {
 /// The health screen finds a non-finite value anywhere, here in the bed's last chunk.
 #[test]
 fn a_non_finite_stress_stops_the_run() {
-    let mut sim = Simulation::new(&impact());
+    let mut sim = Simulation::new(&common::full_model_coarse());
     sim.step().unwrap();
     {
         let mut bed = sim.points_mut("bed").unwrap();

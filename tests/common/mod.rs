@@ -19,3 +19,16 @@ pub fn scene(name: &str, sets: &[&str]) -> Scene {
         .unwrap_or_else(|e| panic!("{e}"))
         .0
 }
+
+/// The full model at a coarse resolution: a PS-1 bed, an elastic intruder, CPDI,
+/// frictional contact, cell-averaged dilatation.
+pub fn full_model_coarse() -> Scene {
+    scene(
+        "bench_contact",
+        &[
+            "domain.cells=(40, 40)",
+            "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
+            "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)",
+        ],
+    )
+}
