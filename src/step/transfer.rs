@@ -30,8 +30,9 @@ use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 /// With the cell-averaged dilatation the stress's in-plane trace is replaced by its cell
 /// mean (`average_stress_trace`) before it is scattered: that force is the exact conjugate
 /// of the averaged `tr L`, so the internal forces' power equals the stress power the points
-/// see (the B-bar pairing; docs/numerics.md). Without it the two differ wherever the trace varies
-/// within a cell, e.g. next to disconnected points, and the impact gains energy at small steps.
+/// see (the B-bar pairing; docs/numerics.md). Without it the two differ wherever the trace
+/// varies within a cell, e.g. next to disconnected points, and the impact gained energy at
+/// small steps.
 pub fn particle_to_grid(
     grid: Res<GridGeometry>,
     gravity: Res<Gravity>,
