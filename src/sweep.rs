@@ -249,7 +249,7 @@ pub fn run_sweep(
 }
 
 /// A path written in a batch file (its scene), taken relative to that file's directory.
-pub(crate) fn beside(file: &Path, relative: &str) -> PathBuf {
+pub fn beside(file: &Path, relative: &str) -> PathBuf {
     file.parent().unwrap_or(Path::new(".")).join(relative)
 }
 

@@ -37,7 +37,8 @@ fn every_run_of_every_shipped_sweep_and_study_loads() {
     let registries = Regolith::default().registries();
     let mut checked = 0;
     let mut check = |batch: &std::path::Path, scene: &str, sets: &[String]| {
-        let scene = batch.parent().unwrap().join(scene);
+        // Resolved as `regolith sweep` and `regolith study` resolve it.
+        let scene = regolith::sweep::beside(batch, scene);
         Scene::load(&scene, sets, &registries)
             .unwrap_or_else(|e| panic!("{}: {e}", batch.display()));
         checked += 1;
