@@ -19,6 +19,10 @@ use crate::grid::GridGeometry;
 /// Cell rows per band (at least 3, see the module docs).
 pub const BAND_ROWS: usize = 4;
 
+/// Points per chunk of the parallel bucketing. Fixed (not derived from the thread count), so
+/// the buckets come out the same whatever the number of threads.
+const BUCKET_CHUNK: usize = 4096;
+
 /// The points of one body bucketed by band (a counting sort, rebuilt whenever they move).
 #[derive(Component, Clone, Debug, Default)]
 pub struct Bands {
@@ -26,31 +30,59 @@ pub struct Bands {
     start: Vec<usize>,
     /// Point indices, ascending within each band.
     points: Vec<u32>,
-    /// Scratch: the next free slot of each band while filling.
-    cursor: Vec<usize>,
+    /// Scratch, chunk-major (`chunk * bands + band`): first the number of the chunk's points
+    /// in each band, then the slot where the chunk's next point of that band goes.
+    slots: Vec<usize>,
 }
 
 impl Bands {
     /// Buckets the points by band, given each point's band; no allocation once the buffers
-    /// have grown.
+    /// have grown. A parallel counting sort over fixed chunks of points: each chunk counts
+    /// its points per band, a short serial pass turns the counts into each chunk's first
+    /// slot in each band (bands in order, chunks in order within a band), and each chunk
+    /// then places its points. Within a band the points come out in ascending index order,
+    /// as a serial counting sort would place them.
     pub fn rebuild(&mut self, grid: &GridGeometry, band_of: &[u32]) {
         let count = grid.cells[1].div_ceil(BAND_ROWS);
+        let chunks = band_of.len().div_ceil(BUCKET_CHUNK);
+        self.slots.clear();
+        self.slots.resize(chunks * count, 0);
+        self.slots
+            .par_chunks_mut(count)
+            .zip(band_of.par_chunks(BUCKET_CHUNK))
+            .for_each(|(tally, bands)| {
+                for &b in bands {
+                    tally[b as usize] += 1;
+                }
+            });
         self.start.clear();
         self.start.resize(count + 1, 0);
-        for &b in band_of {
-            self.start[b as usize + 1] += 1;
-        }
+        let mut next = 0;
         for b in 0..count {
-            self.start[b + 1] += self.start[b];
+            self.start[b] = next;
+            for c in 0..chunks {
+                let slot = &mut self.slots[c * count + b];
+                let tally = *slot;
+                *slot = next;
+                next += tally;
+            }
         }
+        self.start[count] = next;
         self.points.resize(band_of.len(), 0);
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.start[..count]);
-        for (p, &b) in band_of.iter().enumerate() {
-            let slot = &mut self.cursor[b as usize];
-            self.points[*slot] = p as u32;
-            *slot += 1;
-        }
+        let placed = Shared::new(&mut self.points);
+        self.slots
+            .par_chunks_mut(count)
+            .zip(band_of.par_chunks(BUCKET_CHUNK))
+            .enumerate()
+            .for_each(|(c, (slot, bands))| {
+                for (k, &b) in bands.iter().enumerate() {
+                    let s = &mut slot[b as usize];
+                    // SAFETY: each (chunk, band) pair owns the slots from its first slot up
+                    // to the next pair's, and `*s` stays below `band_of.len()`.
+                    unsafe { placed.set_at(*s, (c * BUCKET_CHUNK + k) as u32) };
+                    *s += 1;
+                }
+            });
     }
 
     pub fn count(&self) -> usize {
@@ -95,11 +127,24 @@ pub struct Shared<T>(*mut T, usize);
 unsafe impl<T: Send> Send for Shared<T> {}
 unsafe impl<T: Send> Sync for Shared<T> {}
 
-impl<T: Copy + std::ops::AddAssign> Shared<T> {
+impl<T: Copy> Shared<T> {
     pub fn new(slice: &mut [T]) -> Self {
         Shared(slice.as_mut_ptr(), slice.len())
     }
 
+    /// `slice[i] = v`.
+    ///
+    /// # Safety
+    /// As for `add_at`.
+    #[inline]
+    pub unsafe fn set_at(&self, i: usize, v: T) {
+        debug_assert!(i < self.1, "index {i} outside the slice of {}", self.1);
+        // SAFETY: in bounds and exclusive, per the caller's guarantee.
+        unsafe { *self.0.add(i) = v }
+    }
+}
+
+impl<T: Copy + std::ops::AddAssign> Shared<T> {
     /// `slice[i] += v`.
     ///
     /// # Safety
@@ -114,5 +159,35 @@ impl<T: Copy + std::ops::AddAssign> Shared<T> {
         );
         // SAFETY: in bounds and exclusive, per the caller's guarantee.
         unsafe { *self.0.add(i) += v }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::{BUCKET_CHUNK, Bands};
+    use crate::grid::GridGeometry;
+
+    #[test]
+    fn parallel_bucketing_matches_a_serial_counting_sort() {
+        let grid = GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [10, 37],
+            periodic: [false, false],
+        };
+        // Several chunks, the last one partial, bands in a scrambled order.
+        let n = 3 * BUCKET_CHUNK + 123;
+        let band_of: Vec<u32> = (0..n).map(|p| ((p * 7919 + p / 5) % 10) as u32).collect();
+        let mut bands = Bands::default();
+        bands.rebuild(&grid, &band_of);
+        assert_eq!(bands.count(), 10);
+        for b in 0..bands.count() {
+            let expected: Vec<u32> = (0..n as u32)
+                .filter(|&p| band_of[p as usize] == b as u32)
+                .collect();
+            assert_eq!(bands.points(b), &expected[..], "band {b}");
+        }
     }
 }
