@@ -53,6 +53,9 @@ pub fn particle_to_grid(
         let force = Shared::new(&mut field.force);
         let gradient = Shared::new(&mut field.mass_gradient);
         bands.for_each_phase(grid.periodic[1], |b| {
+            // Local copies: the stores below could otherwise alias the captured pointers,
+            // which the compiler then reloads for every entry.
+            let (mass, momentum, force, gradient) = (mass, momentum, force, gradient);
             for &p in bands.points(b) {
                 let p = p as usize;
                 let f = &location.footprint[p];
