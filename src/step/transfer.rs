@@ -216,6 +216,7 @@ impl CellDilatation {
         let volume = Shared::new(&mut self.volume);
         let weighted = Shared::new(&mut self.weighted);
         bands.for_each(|b| {
+            let (volume, weighted) = (volume, weighted); // see `particle_to_grid`
             for &k in bands.points(b) {
                 let k = k as usize;
                 let c = cell[k] as usize;
