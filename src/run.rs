@@ -148,6 +148,10 @@ pub fn summarize(
         .bodies()
         .into_iter()
         .map(|(b, s, n)| BodySummary {
+            state_hash: format!(
+                "{:016x}",
+                sim.points(&b.name).map_or(0, |p| p.fingerprint())
+            ),
             name: b.name,
             material: b.material.to_string(),
             points: n,

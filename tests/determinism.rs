@@ -5,39 +5,13 @@
 
 mod common;
 
-use std::collections::hash_map::DefaultHasher;
-use std::hash::Hasher;
-
 use regolith::Simulation;
 
-fn state_hash(sim: &mut Simulation) -> u64 {
-    let mut h = DefaultHasher::new();
-    for name in ["bed", "disc"] {
-        let p = sim.points(name).unwrap();
-        for k in 0..p.len() {
-            for v in [
-                p.position[k].x,
-                p.position[k].y,
-                p.velocity[k].x,
-                p.velocity[k].y,
-                p.volume[k],
-            ] {
-                h.write_u64(v.to_bits());
-            }
-            for v in [
-                p.stress[k].xx,
-                p.stress[k].yy,
-                p.stress[k].xy,
-                p.stress[k].zz,
-            ] {
-                h.write_u64(v.to_bits());
-            }
-        }
-    }
-    h.finish()
+fn state_hash(sim: &mut Simulation) -> [u64; 2] {
+    ["bed", "disc"].map(|name| sim.points(name).unwrap().fingerprint())
 }
 
-fn run_with_threads(threads: usize, steps: usize) -> u64 {
+fn run_with_threads(threads: usize, steps: usize) -> [u64; 2] {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -61,4 +61,7 @@ pub struct BodySummary {
     pub kinetic_energy: f64,
     /// Points that left through an `Open` side (their mass is no longer in `mass`).
     pub retired_points: usize,
+    /// `Points::fingerprint` of the final state, 16 hex digits: equal for two runs exactly
+    /// when their final point states are bitwise equal.
+    pub state_hash: String,
 }
