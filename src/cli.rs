@@ -368,6 +368,24 @@ fn report(summary: &Summary, out: &Path) {
         summary.cfl,
         out.display()
     );
+    println!(
+        "  wall time per step set: {}",
+        set_shares(&summary.timings_s)
+    );
+}
+
+/// `name seconds (share)` for each step set, the largest first.
+fn set_shares(timings: &std::collections::BTreeMap<String, f64>) -> String {
+    let total: f64 = timings.values().sum();
+    let mut sets: Vec<(&String, &f64)> = timings.iter().collect();
+    sets.sort_by(|a, b| b.1.total_cmp(a.1));
+    sets.iter()
+        .map(|&(name, &s)| {
+            let share = if total > 0.0 { 100.0 * s / total } else { 0.0 };
+            format!("{name} {s:.3} s ({share:.0}%)")
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn run(
