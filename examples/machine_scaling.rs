@@ -1,7 +1,8 @@
 //! What the machine itself gives from one thread to two, to read the step's scaling against
 //! (docs/BENCHMARKS.md, "Where the shortfall comes from"): a compute-bound loop, and a
 //! read-modify-write stream over an array of each thread's own, small enough for the caches
-//! and too large for them.
+//! and too large for them; and what one fork-join of rayon costs (a step has about twenty
+//! parallel loops per body).
 //!
 //! ```text
 //! cargo run --release --example machine_scaling
@@ -9,6 +10,8 @@
 
 use std::hint::black_box;
 use std::sync::Barrier;
+
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Independent multiply-add chains: bound by the floating-point units, not by memory.
@@ -76,6 +79,26 @@ fn main() {
         compute_run(1),
         compute_run(2),
     );
+    let joins = 100_000;
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        let seconds = pool.install(|| {
+            let start = Instant::now();
+            for _ in 0..joins {
+                (0..1024usize).into_par_iter().for_each(|k| {
+                    black_box(k);
+                });
+            }
+            start.elapsed().as_secs_f64()
+        });
+        println!(
+            "| one parallel loop over 1024 empty items, {threads} thread(s) | {:.2} us per loop | | |",
+            1e6 * seconds / joins as f64
+        );
+    }
     for (mib, passes) in [(8, 200), (128, 12)] {
         let len = mib * 1024 * 1024 / 8;
         let run = |threads| {
