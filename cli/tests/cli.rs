@@ -55,6 +55,11 @@ fn run_writes_summary_and_trajectory() {
     assert_eq!(body["name"], "column");
     assert!(body["kinetic_energy"].as_f64().unwrap() > 0.0);
     assert_eq!(body["centre_of_mass"].as_array().unwrap().len(), 2);
+    let hash = body["state_hash"].as_str().unwrap();
+    assert!(
+        hash.len() == 16 && hash.chars().all(|c| c.is_ascii_hexdigit()),
+        "state_hash {hash}"
+    );
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
@@ -194,6 +199,42 @@ fn regolith_resume_finishes_a_run_identically() {
         std::fs::read_to_string(plain.join("trajectory.csv")).unwrap(),
         std::fs::read_to_string(checked.join("trajectory.csv")).unwrap()
     );
+}
+
+/// The state hash in `summary.json` lets a user check a run on another thread count: a
+/// scene with two bodies in frictional contact ends bitwise the same on one and two threads.
+#[test]
+fn the_state_hash_is_the_same_on_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_path("contact_incline");
+    let hashes = |threads: &str| {
+        let out = dir.path().join(format!("t{threads}"));
+        let o = Command::new(env!("CARGO_BIN_EXE_regolith"))
+            .env("RAYON_NUM_THREADS", threads)
+            .args([
+                "run",
+                scene.to_str().unwrap(),
+                "--quiet",
+                "--set",
+                "time.end=0.02",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s = read_json(&out.join("summary.json"));
+        assert_eq!(s["threads"].as_u64().unwrap().to_string(), threads);
+        s["bodies"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["state_hash"].as_str().unwrap().to_string())
+            .collect::<Vec<_>>()
+    };
+    let (one, two) = (hashes("1"), hashes("2"));
+    assert_eq!(one.len(), 2);
+    assert_eq!(one, two);
 }
 
 /// `--rrd` records with one flag: the file is a valid recording holding every body's points.
