@@ -17,6 +17,28 @@ fn regolith(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// `regolith run scene --quiet --set time.end=0.02 --out out [extra]`, on `threads` threads
+/// when given; the run must succeed. Returns `out`.
+fn run_to_20_ms(
+    scene: &Path,
+    out: &Path,
+    threads: Option<&str>,
+    extra: &[&str],
+) -> std::path::PathBuf {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_regolith"));
+    if let Some(threads) = threads {
+        command.env("RAYON_NUM_THREADS", threads);
+    }
+    let o = command
+        .args(["run", scene.to_str().unwrap(), "--quiet"])
+        .args(["--set", "time.end=0.02", "--out", out.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out.to_path_buf()
+}
+
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -164,24 +186,9 @@ fn regolith_resume_finishes_a_run_identically() {
     let bin = env!("CARGO_BIN_EXE_regolith");
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_path("contact_incline");
-    let run = |out: &str, extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            scene.to_str().unwrap(),
-            "--quiet",
-            "--set",
-            "time.end=0.02",
-            "--out",
-        ];
-        let out = dir.path().join(out);
-        args.push(out.to_str().unwrap());
-        args.extend_from_slice(extra);
-        let o = Command::new(bin).args(&args).output().unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        out
-    };
-    let plain = run("plain", &[]);
-    let checked = run("checked", &["--checkpoint-every", "100"]);
+    let plain = run_to_20_ms(&scene, &dir.path().join("plain"), None, &[]);
+    let checked = dir.path().join("checked");
+    run_to_20_ms(&scene, &checked, None, &["--checkpoint-every", "100"]);
     assert!(checked.join("checkpoint.bin").exists());
     let o = Command::new(bin)
         .args(["resume", checked.to_str().unwrap(), "--quiet"])
@@ -208,21 +215,7 @@ fn the_state_hash_is_the_same_on_one_and_two_threads() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_path("contact_incline");
     let hashes = |threads: &str| {
-        let out = dir.path().join(format!("t{threads}"));
-        let o = Command::new(env!("CARGO_BIN_EXE_regolith"))
-            .env("RAYON_NUM_THREADS", threads)
-            .args([
-                "run",
-                scene.to_str().unwrap(),
-                "--quiet",
-                "--set",
-                "time.end=0.02",
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let out = run_to_20_ms(&scene, &dir.path().join(threads), Some(threads), &[]);
         let s = read_json(&out.join("summary.json"));
         assert_eq!(s["threads"].as_u64().unwrap().to_string(), threads);
         s["bodies"]
