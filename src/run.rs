@@ -233,7 +233,6 @@ fn impact_metrics(sim: &Simulation, bodies: &[BodySummary]) -> Option<ImpactMetr
 pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
     let nodes = sim.grid().node_count();
     let cells = sim.grid().cells[0] * sim.grid().cells[1];
-    let normals = scene.bodies.len() > 1 && scene.contact.needs_normals();
     let averaging = if scene.dilatation == crate::scene::Dilatation::CellAveraged {
         16 * cells
     } else {
@@ -248,7 +247,12 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
             n * (crate::body::Points::BYTES_PER_POINT
                 + crate::integration::Footprint::BYTES
                 + spec.material.history_bytes())
-                + nodes * GridField::bytes_per_node(normals)
+                + nodes
+                    * GridField::bytes_per_node(
+                        scene
+                            .contact
+                            .needs_normal_of(&spec.name, scene.bodies.len()),
+                    )
                 + averaging
         })
         .sum()

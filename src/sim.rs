@@ -177,7 +177,9 @@ impl Simulation {
             let field = GridField::new(
                 grid.node_count(),
                 mass_tolerance(density, grid.cell_size),
-                multi_body && scene.contact.needs_normals(),
+                scene
+                    .contact
+                    .needs_normal_of(&spec.name, scene.bodies.len()),
             );
             let mut entity = world.spawn((
                 body,

@@ -297,3 +297,48 @@ fn both_contact_laws_run_multi_body_scenes() {
         sim.run(|_| {}).unwrap_or_else(|e| panic!("{law}: {e}"));
     }
 }
+
+/// With two bodies and a named normal, only the named body's mass gradient is scattered
+/// (`Contact::needs_normal_of`): the run must be bitwise the one that keeps every body's.
+#[test]
+fn leaving_out_unused_gradients_changes_nothing() {
+    use regolith::body::Body;
+    use regolith::grid::GridField;
+
+    let scene = common::scene(
+        "bench_contact",
+        &[
+            "domain.cells=(40, 40)",
+            "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
+            "contact=Frictional(friction: 0.1, normal: Body(\"disc\"))",
+        ],
+    );
+    let mut lean = Simulation::new(&scene);
+    let mut full = Simulation::new(&scene);
+    assert!(lean.grid_field("bed").unwrap().mass_gradient.is_empty());
+    assert!(!lean.grid_field("disc").unwrap().mass_gradient.is_empty());
+    let mut fields = full.world.query::<(&Body, &mut GridField)>();
+    for (_, mut field) in fields.iter_mut(&mut full.world) {
+        let nodes = field.mass.len();
+        *field = GridField::new(nodes, field.mass_tolerance, true);
+    }
+    let mut steps_in_contact = 0;
+    for _ in 0..300 {
+        lean.step().unwrap();
+        full.step().unwrap();
+        if full.grid_field("disc").unwrap().contact_force != DVec2::ZERO {
+            steps_in_contact += 1;
+        }
+    }
+    assert!(
+        steps_in_contact > 100,
+        "the disc must be in contact for the comparison to mean anything ({steps_in_contact} steps)"
+    );
+    for name in ["bed", "disc"] {
+        assert_eq!(
+            lean.points(name).unwrap().fingerprint(),
+            full.points(name).unwrap().fingerprint(),
+            "{name}"
+        );
+    }
+}
