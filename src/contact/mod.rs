@@ -62,7 +62,8 @@ impl Contact {
     /// shared node only one body is present, which gets no impulse whatever its normal.
     /// With three or more, a node without the named body falls back to the common normal of
     /// the others, so every body keeps its gradient. Leaving the unused gradients out saves
-    /// a quarter of the bed's scatter in the paper's scenes (all name their intruder).
+    /// one of the bed's four accumulations per node in the scatter, and its clear, in the
+    /// paper's scenes (all name their intruder).
     pub fn needs_normal_of(&self, body: &str, bodies: usize) -> bool {
         match self {
             Contact::NoSlip => false,
