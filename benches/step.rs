@@ -8,7 +8,7 @@ use regolith::integration::{CpdiFixed, Footprint, Scheme};
 use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::sim::on_worker;
-use regolith::step::locate_points;
+use regolith::step::{locate_points, update_grid};
 use regolith::step::transfer::{grid_to_particle, particle_to_grid};
 use regolith::{Regolith, Scene, Simulation};
 
@@ -41,6 +41,9 @@ fn systems(c: &mut Criterion) {
     });
     c.bench_function("constitutive_mui_30k", |b| {
         b.iter(|| on_worker(|| world.run_system_once(update_stress::<MuI>).unwrap()))
+    });
+    c.bench_function("grid_update_100x100_two_bodies", |b| {
+        b.iter(|| on_worker(|| world.run_system_once(update_grid).unwrap()))
     });
     c.bench_function("contact_frictional_100x100", |b| {
         b.iter(|| on_worker(|| world.run_system_once(frictional).unwrap()))

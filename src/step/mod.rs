@@ -25,7 +25,7 @@ use crate::scene::{Dilatation, StressUpdate};
 use crate::sim::Clock;
 
 pub use bands::Bands;
-pub use grid_update::apply_walls;
+pub use grid_update::{apply_walls, update_grid};
 pub use locate::{Location, locate_points};
 pub use prepare::signal_speed;
 pub use transfer::CellDilatation;
