@@ -8,8 +8,8 @@ use regolith::integration::{CpdiFixed, Footprint, Scheme};
 use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::sim::on_worker;
-use regolith::step::{locate_points, update_grid};
 use regolith::step::transfer::{grid_to_particle, particle_to_grid};
+use regolith::step::{locate_points, update_grid};
 use regolith::{Regolith, Scene, Simulation};
 
 const PS1: &str = "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)";
