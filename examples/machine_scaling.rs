@@ -10,9 +10,9 @@
 
 use std::hint::black_box;
 use std::sync::Barrier;
+use std::time::Instant;
 
 use rayon::prelude::*;
-use std::time::Instant;
 
 /// Independent multiply-add chains: bound by the floating-point units, not by memory.
 fn compute(rounds: usize) -> f64 {
