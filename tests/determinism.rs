@@ -7,10 +7,6 @@ mod common;
 
 use regolith::Simulation;
 
-fn state_hash(sim: &mut Simulation) -> [u64; 2] {
-    ["bed", "disc"].map(|name| sim.points(name).unwrap().fingerprint())
-}
-
 fn run_with_threads(threads: usize, steps: usize) -> [u64; 2] {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -21,7 +17,7 @@ fn run_with_threads(threads: usize, steps: usize) -> [u64; 2] {
         for _ in 0..steps {
             sim.step().unwrap();
         }
-        state_hash(&mut sim)
+        common::bed_and_disc_fingerprints(&mut sim)
     })
 }
 
@@ -47,7 +43,10 @@ fn reused_cells_equal_cells_found_again() {
         found.points_mut("bed").unwrap();
         found.points_mut("disc").unwrap();
     }
-    assert_eq!(state_hash(&mut reused), state_hash(&mut found));
+    assert_eq!(
+        common::bed_and_disc_fingerprints(&mut reused),
+        common::bed_and_disc_fingerprints(&mut found)
+    );
 }
 
 /// The parallel survey of the Diagnostics set sums over fixed chunks in order, so the body

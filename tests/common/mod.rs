@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use regolith::{Regolith, Scene};
+use regolith::{Regolith, Scene, Simulation};
 
 /// Path of a shipped scene.
 pub fn scene_path(name: &str) -> PathBuf {
@@ -23,12 +23,22 @@ pub fn scene(name: &str, sets: &[&str]) -> Scene {
 /// The full model at a coarse resolution: a PS-1 bed, an elastic intruder, CPDI,
 /// frictional contact, cell-averaged dilatation.
 pub fn full_model_coarse() -> Scene {
-    scene(
-        "bench_contact",
-        &[
-            "domain.cells=(40, 40)",
-            "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
-            "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)",
-        ],
-    )
+    full_model_coarse_with(&[])
+}
+
+/// `full_model_coarse` with further `--set`-style overrides.
+pub fn full_model_coarse_with(extra: &[&str]) -> Scene {
+    let mut sets = vec![
+        "domain.cells=(40, 40)",
+        "time=(end: 1.0, step: Cfl(0.5), output_every: 1.0)",
+        "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)",
+    ];
+    sets.extend_from_slice(extra);
+    scene("bench_contact", &sets)
+}
+
+/// The fingerprints of the bed and the disc of `full_model_coarse`, to compare two runs
+/// bit for bit.
+pub fn bed_and_disc_fingerprints(sim: &mut Simulation) -> [u64; 2] {
+    ["bed", "disc"].map(|name| sim.points(name).unwrap().fingerprint())
 }
