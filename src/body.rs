@@ -26,6 +26,10 @@ pub struct Points {
     /// Grid velocity interpolated at the point in the last step (its advection velocity);
     /// MUSL carries it from the velocity pass to the position update.
     pub advection: Vec<DVec2>,
+    /// The affine part of the point's velocity field, `C_p` (1/s), carried from step to
+    /// step by the APIC transfer (`transfer: Apic`); empty with FLIP.
+    #[serde(default)]
+    pub affine: Vec<DMat2>,
     /// The density the constitutive update sees (kg/m^3): `m/V`, or with cell-averaged
     /// dilatation the mean density of the points in the point's cell.
     pub density: Vec<f64>,
@@ -63,6 +67,11 @@ impl Points {
             }
             for value in [t.xx, t.yy, t.xy, t.zz] {
                 eat(value);
+            }
+            if let Some(c) = self.affine.get(k) {
+                for value in c.to_cols_array() {
+                    eat(value);
+                }
             }
         }
         h

@@ -189,13 +189,88 @@ impl Footprint {
     /// code.
     #[inline(always)]
     pub fn for_each_entry(&self, mut visit: impl FnMut(usize, f64, DVec2)) {
+        self.for_each_indexed(|_, _, n, w, grad| visit(n, w, grad));
+    }
+
+    /// As [`Footprint::for_each_entry`], also passing the entry's `(kx, ky)`.
+    #[inline(always)]
+    pub fn for_each_indexed(&self, mut visit: impl FnMut(usize, usize, usize, f64, DVec2)) {
         for ky in 0..3 {
             for kx in 0..3 {
                 let w = self.wx[kx] * self.wy[ky];
                 let grad = DVec2::new(self.gx[kx] * self.wy[ky], self.wx[kx] * self.gy[ky]);
-                visit(self.node(kx, ky), w, grad);
+                visit(kx, ky, self.node(kx, ky), w, grad);
             }
         }
+    }
+
+    /// Node position minus the point's, per entry: `(dx[kx], dy[ky])` in metres, the nearest
+    /// image on a periodic axis. Entries past a non-periodic edge get the offset of the
+    /// node they point at; their weight is zero.
+    #[inline]
+    pub fn offsets(&self, grid: &GridGeometry, x: DVec2) -> ([f64; 3], [f64; 3]) {
+        let h = grid.cell_size;
+        let nx = grid.nodes_along(0) as u32;
+        let image = |d: f64, a: usize| {
+            if !grid.periodic[a] {
+                return d;
+            }
+            let span = grid.cells[a] as f64 * h;
+            if d > 0.5 * span {
+                d - span
+            } else if d < -0.5 * span {
+                d + span
+            } else {
+                d
+            }
+        };
+        let rel = x - grid.origin;
+        let dx = self.column.map(|i| image(i as f64 * h - rel.x, 0));
+        let dy = self.row.map(|r| image((r / nx) as f64 * h - rel.y, 1));
+        (dx, dy)
+    }
+
+    /// The APIC inertia-like matrix `D = sum_i S_i d_i d_i^T` of the point (`d_i` the node
+    /// offsets), from the two 1D rules: the weights factorise, so the diagonal entries are
+    /// 1D sums and the off-diagonal one a product of 1D first moments.
+    #[inline]
+    pub fn affine_inertia(&self, dx: &[f64; 3], dy: &[f64; 3]) -> DMat2 {
+        let (mut xx, mut yy, mut x1, mut y1) = (0.0, 0.0, 0.0, 0.0);
+        for k in 0..3 {
+            xx += self.wx[k] * dx[k] * dx[k];
+            yy += self.wy[k] * dy[k] * dy[k];
+            x1 += self.wx[k] * dx[k];
+            y1 += self.wy[k] * dy[k];
+        }
+        let xy = x1 * y1;
+        DMat2::from_cols(DVec2::new(xx, xy), DVec2::new(xy, yy))
+    }
+
+    /// `sum_i S_i u_i`, `sum_i u_i (outer) grad S_i` and `sum_i S_i u_i (outer) d_i` (the
+    /// APIC `B` matrix) in one pass.
+    #[inline]
+    pub fn interpolate_affine(
+        &self,
+        u: &[DVec2],
+        dx: &[f64; 3],
+        dy: &[f64; 3],
+    ) -> (DVec2, DMat2, DMat2) {
+        let (mut value, mut gx, mut gy, mut bx, mut by) = (DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, DVec2::ZERO);
+        for ky in 0..3 {
+            let (mut along, mut along_dx, mut along_x) = (DVec2::ZERO, DVec2::ZERO, DVec2::ZERO);
+            for kx in 0..3 {
+                let v = u[self.node(kx, ky)];
+                along += self.wx[kx] * v;
+                along_dx += self.gx[kx] * v;
+                along_x += (self.wx[kx] * dx[kx]) * v;
+            }
+            value += self.wy[ky] * along;
+            gx += self.wy[ky] * along_dx;
+            gy += self.gy[ky] * along;
+            bx += self.wy[ky] * along_x;
+            by += (self.wy[ky] * dy[ky]) * along;
+        }
+        (value, DMat2::from_cols(gx, gy), DMat2::from_cols(bx, by))
     }
 
     /// `(node, weight, gradient)` for all nine entries, in `for_each_entry`'s order.

@@ -14,7 +14,7 @@ use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::output::trajectory::Trajectory;
 use crate::output::{OutputFaults, RunDir};
-use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Walls};
+use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Transfer, Walls};
 use crate::step::{self, StepSet, Timings};
 use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
@@ -133,6 +133,7 @@ impl Simulation {
             integration: scene.integration,
             update: scene.update,
             dilatation: scene.dilatation,
+            transfer: scene.transfer,
         });
         let multi_body = scene.bodies.len() > 1;
         let mut materials = BTreeSet::new();
@@ -161,6 +162,10 @@ impl Simulation {
                 stress,
                 velocity_gradient: vec![DMat2::ZERO; n],
                 advection: vec![spec.velocity; n],
+                affine: match scene.transfer {
+                    Transfer::Apic => vec![DMat2::ZERO; n],
+                    Transfer::Flip => Vec::new(),
+                },
                 density: point_density,
             };
             let body = Body {

@@ -2,7 +2,7 @@
 
 use std::collections::HashSet;
 
-use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
+use super::{InitialStress, Scene, StressUpdate, TimeStep, Transfer, Wall};
 use crate::contact::{Contact, NormalRule};
 use crate::error::SceneError;
 use crate::fill::fill;
@@ -184,6 +184,15 @@ impl Scene {
             return err(
                 "flip",
                 format!("flip must lie in [0, 1] (1 = pure FLIP), got {}", self.flip),
+            );
+        }
+        if self.transfer == Transfer::Apic && self.flip != 1.0 {
+            return err(
+                "flip",
+                format!(
+                    "flip = {} blends FLIP with PIC, but this scene's transfer is Apic (the default), which has no blend; write transfer: Flip to use it",
+                    self.flip
+                ),
             );
         }
         if let Contact::Frictional { friction, normal } = &self.contact {

@@ -53,6 +53,10 @@ pub struct Scene {
     /// `Frictional(friction: mu)`.
     #[serde(default)]
     pub contact: Contact,
+    /// How velocities go from the grid back to the points: `Flip` (the paper's) or `Apic`
+    /// (affine particle-in-cell); docs/numerics.md.
+    #[serde(default)]
+    pub transfer: Transfer,
     /// FLIP fraction of the point velocity update: 1 is pure FLIP (the paper), 0 pure PIC.
     #[serde(default = "default_flip")]
     pub flip: f64,
@@ -88,6 +92,20 @@ pub enum StressUpdate {
     /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
     /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
     Musl,
+}
+
+/// The grid-to-point velocity transfer (docs/numerics.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Transfer {
+    /// FLIP: each point keeps its velocity and adds the grid's acceleration, optionally
+    /// blended with PIC by `flip` (the paper's transfer).
+    Flip,
+    /// APIC (Jiang et al. 2015), the default: each point takes the grid velocity at its
+    /// position and the affine field `C_p` around it, which it hands back to the grid in
+    /// the next scatter. Conserves linear and angular momentum and reproduces affine
+    /// fields; unlike a FLIP/PIC blend it has no damping set per step.
+    #[default]
+    Apic,
 }
 
 /// How the volumetric part of the velocity gradient is taken (docs/numerics.md).

@@ -21,7 +21,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel};
 
 use crate::integration::{CpdiFixed, Integration, Linear, Scheme};
-use crate::scene::{Dilatation, StressUpdate};
+use crate::scene::{Dilatation, StressUpdate, Transfer};
 use crate::sim::Clock;
 
 pub use bands::Bands;
@@ -133,6 +133,7 @@ pub struct StepOptions {
     pub integration: Integration,
     pub update: StressUpdate,
     pub dilatation: Dilatation,
+    pub transfer: Transfer,
 }
 
 /// The schedule of one step with the core systems for the given options.
@@ -158,8 +159,8 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
             .in_set(StepSet::Prepare),
     );
     match options.integration {
-        Integration::Linear => add_transfers::<Linear>(&mut schedule, options.update),
-        Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, options.update),
+        Integration::Linear => add_transfers::<Linear>(&mut schedule, options),
+        Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, options),
     }
     let gradient_done = StepSet::GridToParticle;
     match options.dilatation {
@@ -207,7 +208,7 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct GradientSystems;
 
-fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
+fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: StepOptions) {
     schedule.add_systems(
         (
             locate_points::<S>,
@@ -217,24 +218,24 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, update: StressUpdate) {
             .chain()
             .in_set(StepSet::ParticleToGrid),
     );
-    match update {
-        StressUpdate::Usl => {
-            schedule.add_systems(
-                transfer::grid_to_particle
-                    .in_set(StepSet::GridToParticle)
-                    .in_set(GradientSystems),
-            );
+    let gather = (StepSet::GridToParticle, GradientSystems);
+    match (options.update, options.transfer) {
+        (StressUpdate::Usl, Transfer::Flip) => {
+            schedule.add_systems(transfer::grid_to_particle.in_set(gather.0).in_set(gather.1));
         }
-        StressUpdate::Musl => {
+        (StressUpdate::Usl, Transfer::Apic) => {
+            schedule.add_systems(transfer::apic_to_particle.in_set(gather.0).in_set(gather.1));
+        }
+        (StressUpdate::Musl, transfer) => {
+            let velocity = match transfer {
+                Transfer::Flip => transfer::musl_velocity.into_configs(),
+                Transfer::Apic => transfer::musl_apic_velocity.into_configs(),
+            };
             schedule.add_systems(
-                (
-                    transfer::musl_velocity,
-                    transfer::musl_remap,
-                    transfer::musl_gradient,
-                )
+                (velocity, transfer::musl_remap, transfer::musl_gradient)
                     .chain()
-                    .in_set(StepSet::GridToParticle)
-                    .in_set(GradientSystems),
+                    .in_set(gather.0)
+                    .in_set(gather.1),
             );
         }
     }

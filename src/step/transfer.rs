@@ -12,7 +12,7 @@
 //! after the optional cell averaging of the dilatation (`dilatation`).
 
 use bevy_ecs::prelude::*;
-use glam::DVec2;
+use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 
 use super::bands::{Bands, Shared};
@@ -20,6 +20,7 @@ use super::grid_update::apply_walls;
 use super::locate::Location;
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
+use crate::integration::Footprint;
 use crate::scene::Wall;
 use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 
@@ -45,9 +46,11 @@ pub fn particle_to_grid(
     )>,
 ) {
     let g = gravity.0;
+    let grid = &*grid;
     for (points, location, mut field, bands, cells) in &mut bodies {
         let field = &mut *field;
         let normals = !field.mass_gradient.is_empty();
+        let apic = !points.affine.is_empty();
         let mass = Shared::new(&mut field.mass);
         let momentum = Shared::new(&mut field.momentum);
         let force = Shared::new(&mut field.force);
@@ -71,12 +74,23 @@ pub fn particle_to_grid(
                 }
                 // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
                 let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
-                f.for_each_entry(|n, w, grad| {
+                // APIC: the momentum of the point's affine field at each node, m C d_i.
+                let (mc, (dx, dy)) = if apic {
+                    (m * points.affine[p], f.offsets(grid, points.position[p]))
+                } else {
+                    (DMat2::ZERO, ([0.0; 3], [0.0; 3]))
+                };
+                f.for_each_indexed(|kx, ky, n, w, grad| {
+                    let affine = if apic {
+                        mc * DVec2::new(dx[kx], dy[ky])
+                    } else {
+                        DVec2::ZERO
+                    };
                     // SAFETY: footprint nodes are in bounds, and bands scattering at the same
                     // time touch disjoint node rows (bands module).
                     unsafe {
                         mass.add_at(n, w * m);
-                        momentum.add_at(n, w * mv);
+                        momentum.add_at(n, w * (mv + affine));
                         force.add_at(n, w * mg - grad.x * tx - grad.y * ty);
                         if normals {
                             gradient.add_at(n, m * grad);
@@ -120,6 +134,79 @@ pub fn grid_to_particle(
     }
 }
 
+/// The APIC gather at one point: the grid velocity `v`, the velocity gradient `L` and the
+/// affine matrix `C = B D^-1` (Jiang et al. 2015), with `B = sum S_i v_i d_i^T` and
+/// `D = sum S_i d_i d_i^T`. For bilinear weights `B D^-1` equals `L` wherever `D` is
+/// invertible; `D` is singular only for a `Linear` point exactly on a node line, where `L`
+/// is taken. CPDI's `D` is never singular (its diagonal is at least `a^2/3`).
+#[inline]
+pub fn apic_gather(
+    f: &Footprint,
+    grid: &GridGeometry,
+    x: DVec2,
+    velocity: &[DVec2],
+) -> (DVec2, DMat2, DMat2) {
+    let (dx, dy) = f.offsets(grid, x);
+    let (v, l, b) = f.interpolate_affine(velocity, &dx, &dy);
+    let d = f.affine_inertia(&dx, &dy);
+    let h2 = grid.cell_size * grid.cell_size;
+    let c = if d.determinant() > 1e-12 * h2 * h2 {
+        b * d.inverse()
+    } else {
+        l
+    };
+    (v, l, c)
+}
+
+/// USL with APIC: the point takes the grid velocity and its affine field, in one pass with
+/// the velocity gradient.
+pub fn apic_to_particle(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+) {
+    let grid = &*grid;
+    for (mut points, location, field) in &mut bodies {
+        let points = &mut *points;
+        location
+            .footprint
+            .par_iter()
+            .zip(points.position.par_iter())
+            .zip(points.velocity.par_iter_mut())
+            .zip(points.advection.par_iter_mut())
+            .zip(points.velocity_gradient.par_iter_mut().zip(points.affine.par_iter_mut()))
+            .for_each(|((((f, &x), v), adv), (l, c))| {
+                let (v_grid, grad, affine) = apic_gather(f, grid, x, &field.velocity);
+                *v = v_grid;
+                *adv = v_grid;
+                *l = grad;
+                *c = affine;
+            });
+    }
+}
+
+/// MUSL pass 1 with APIC: the point's velocity and affine field from the grid.
+pub fn musl_apic_velocity(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+) {
+    let grid = &*grid;
+    for (mut points, location, field) in &mut bodies {
+        let points = &mut *points;
+        location
+            .footprint
+            .par_iter()
+            .zip(points.position.par_iter())
+            .zip(points.velocity.par_iter_mut())
+            .zip(points.advection.par_iter_mut().zip(points.affine.par_iter_mut()))
+            .for_each(|(((f, &x), v), (adv, c))| {
+                let (v_grid, _, affine) = apic_gather(f, grid, x, &field.velocity);
+                *v = v_grid;
+                *adv = v_grid;
+                *c = affine;
+            });
+    }
+}
+
 /// MUSL pass 1: the FLIP velocity update; the advection velocity is kept for pass 3.
 pub fn musl_velocity(
     clock: Res<Clock>,
@@ -152,13 +239,19 @@ pub fn musl_remap(
     for (points, location, mut field) in &mut bodies {
         let field = &mut *field;
         field.momentum.fill(DVec2::ZERO);
-        for (f, (&m, &v)) in location
-            .footprint
-            .iter()
-            .zip(points.mass.iter().zip(&points.velocity))
-        {
-            let mv = m * v;
-            f.for_each_entry(|n, w, _| field.momentum[n] += w * mv);
+        let apic = !points.affine.is_empty();
+        for (k, f) in location.footprint.iter().enumerate() {
+            let m = points.mass[k];
+            let mv = m * points.velocity[k];
+            if apic {
+                let mc = m * points.affine[k];
+                let (dx, dy) = f.offsets(&grid, points.position[k]);
+                f.for_each_indexed(|kx, ky, n, w, _| {
+                    field.momentum[n] += w * (mv + mc * DVec2::new(dx[kx], dy[ky]));
+                });
+            } else {
+                f.for_each_entry(|n, w, _| field.momentum[n] += w * mv);
+            }
         }
         for n in 0..field.mass.len() {
             let m = field.mass[n];

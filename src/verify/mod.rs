@@ -4,6 +4,8 @@
 //! Each function runs a prepared scene and returns the measured quantity; comparing it with
 //! the analytic value (and choosing a tolerance) is the caller's business.
 
+pub mod chute;
+
 use std::f64::consts::FRAC_PI_2;
 
 use crate::error::Fault;

@@ -1,0 +1,216 @@
+//! Steady inclined (chute) flow: the mu(I) answer and what a run is measured by.
+//!
+//! A layer of depth `H` on a rough incline at angle `th`, periodic along the slope, has a
+//! steady solution when `mu_s < tan th < mu_2`: the stress ratio is `tan th` everywhere, so
+//! the inertial number is the constant `I = I_0 (tan th - mu_s) / (mu_2 - tan th)`, the
+//! pressure is lithostatic, `p = rho_c g cos th (H - y)`, and the shear rate
+//! `I sqrt(p / rho_s) / d` integrates to the Bagnold profile
+//! `u(y) = (2/3) (I / d) sqrt(phi g cos th) (H^1.5 - (H - y)^1.5)`, `phi = rho_c / rho_s`.
+//! Below `atan mu_s` the layer stops; above `atan mu_2` no steady state exists and the
+//! layer accelerates at least at `g (sin th - mu_2 cos th)`, since the base can resist at
+//! most `mu_2 p`.
+//!
+//! The dense-flow failures this guards against (docs/numerics.md) take seconds of simulated
+//! time, so the measures are cheap enough to take often: the layer's top, its disconnected
+//! fraction below the surface cells, whether its summed point volume still equals the area
+//! it occupies, and the velocity profile against the analytic one.
+
+use glam::DVec2;
+
+use crate::body::{Phase, PointStates, Points};
+use crate::material::granular::TransPhase;
+use crate::stress::Stress;
+
+/// The mu(I) steady state of a layer of depth `depth` at angle `angle` (radians).
+#[derive(Clone, Debug)]
+pub struct Bagnold {
+    pub angle: f64,
+    pub depth: f64,
+    pub gravity: f64,
+    /// The constant inertial number of the steady layer.
+    pub inertial_number: f64,
+    /// `(I / d) sqrt(phi g cos th)`, so that `u = k (2/3) (H^1.5 - (H - y)^1.5)`.
+    rate: f64,
+}
+
+impl Bagnold {
+    /// The steady state, or `None` when `tan th` is outside `(mu_s, mu_2)`.
+    pub fn new(material: &TransPhase, angle: f64, depth: f64, gravity: f64) -> Option<Bagnold> {
+        let t = angle.tan();
+        if !(t > material.mu_s && t < material.mu_2) {
+            return None;
+        }
+        let i = material.i_0 * (t - material.mu_s) / (material.mu_2 - t);
+        let phi = material.critical_density / material.grain_density;
+        let rate = i / material.grain_diameter * (phi * gravity * angle.cos()).sqrt();
+        Some(Bagnold {
+            angle,
+            depth,
+            gravity,
+            inertial_number: i,
+            rate,
+        })
+    }
+
+    /// Down-slope speed at height `y` above the base.
+    pub fn speed(&self, y: f64) -> f64 {
+        let h = self.depth;
+        let below = (h - y.clamp(0.0, h)).powf(1.5);
+        self.rate * (2.0 / 3.0) * (h.powf(1.5) - below)
+    }
+
+    pub fn surface_speed(&self) -> f64 {
+        self.speed(self.depth)
+    }
+
+    /// Depth-averaged speed, `(3/5) u_s`.
+    pub fn mean_speed(&self) -> f64 {
+        0.6 * self.surface_speed()
+    }
+}
+
+/// `g (sin th - mu_2 cos th)`: the least acceleration of a layer steeper than `atan mu_2`.
+pub fn least_acceleration(material: &TransPhase, angle: f64, gravity: f64) -> f64 {
+    gravity * (angle.sin() - material.mu_2 * angle.cos())
+}
+
+/// The paper's PS-1 photoelastic discs (SCIENCE.md 6), as the chute scenes use them.
+pub fn ps1() -> TransPhase {
+    let (shear, bulk) = crate::material::elastic::moduli(2.0e7, 0.45);
+    TransPhase {
+        shear,
+        bulk,
+        critical_density: 0.79 * 1280.0,
+        grain_density: 1280.0,
+        grain_diameter: 5e-3,
+        mu_s: 0.320,
+        mu_2: 0.598,
+        i_0: 0.278,
+    }
+}
+
+/// Puts a layer of depth `depth` under tilted `gravity` into its lithostatic state (normal
+/// stress `-p` on every plane, shear `T_xy = rho_c g_x (H - y)`, `p = rho_c |g_y| (H - y)`,
+/// volumes on the state line `V = m / rho_c exp(-p / K)`) and, given a profile, moving
+/// with it: a steady flow starts steady instead of after a transient of seconds.
+pub fn start_steady(
+    points: &mut Points,
+    material: &TransPhase,
+    gravity: DVec2,
+    depth: f64,
+    profile: Option<&Bagnold>,
+) {
+    let rho = material.critical_density;
+    for k in 0..points.len() {
+        let below = (depth - points.position[k].y).max(0.0);
+        let p = rho * -gravity.y * below;
+        points.stress[k] = Stress {
+            xy: rho * gravity.x * below,
+            ..Stress::isotropic(p)
+        };
+        points.volume[k] = points.mass[k] / rho * (-p / material.bulk).exp();
+        if let Some(b) = profile {
+            points.velocity[k] = DVec2::new(b.speed(points.position[k].y), 0.0);
+        }
+    }
+}
+
+/// What one moment of a chute run is measured by.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ChuteState {
+    /// Height of the layer's top: the 99th percentile of the points' heights plus half
+    /// their lattice spacing (m).
+    pub top: f64,
+    /// Summed point volume over the area the layer occupies, `width * top`: 1 for an honest
+    /// body (the dense layer's density differs from `rho_c` by `p / K ~ 1e-5`).
+    pub volume_ratio: f64,
+    /// Fraction of the points below the top cell row that are disconnected.
+    pub disconnected_bulk: f64,
+    /// Fraction of all points that are disconnected.
+    pub disconnected: f64,
+    /// Mass-weighted mean down-slope speed (m/s).
+    pub mean_speed: f64,
+    /// 95th percentile of the point speeds (m/s).
+    pub speed_95: f64,
+    /// RMS over cell rows of (row-mean speed - analytic), over the analytic surface
+    /// speed; `None` without a profile.
+    pub profile_error: Option<f64>,
+}
+
+/// Measures a chute layer of width `width` on a grid of cell size `cell`; `profile` is the
+/// analytic steady state to compare the velocity with, if there is one.
+pub fn measure(
+    points: &Points,
+    states: &PointStates,
+    width: f64,
+    cell: f64,
+    profile: Option<&Bagnold>,
+) -> ChuteState {
+    let n = points.len();
+    if n == 0 {
+        return ChuteState::default();
+    }
+    let mut heights: Vec<f64> = points.position.iter().map(|x| x.y).collect();
+    heights.sort_by(f64::total_cmp);
+    let spacing = 2.0 * points.half_width[0];
+    let top = heights[(0.99 * (n - 1) as f64) as usize] + 0.5 * spacing;
+    let volume: f64 = points.volume.iter().sum();
+    let gas = |k: usize| states.phase[k] == Phase::Disconnected;
+    let bulk: Vec<usize> = (0..n).filter(|&k| points.position[k].y < top - cell).collect();
+    let disconnected_bulk = bulk.iter().filter(|&&k| gas(k)).count() as f64 / bulk.len().max(1) as f64;
+    let mass: f64 = points.mass.iter().sum();
+    let mean_speed = (0..n).map(|k| points.mass[k] * points.velocity[k].x).sum::<f64>() / mass;
+    let mut speeds: Vec<f64> = points.velocity.iter().map(|v| v.length()).collect();
+    speeds.sort_by(f64::total_cmp);
+    let profile_error = profile.map(|b| {
+        let rows = (b.depth / cell).round() as usize;
+        let mut sums = vec![(0.0, 0usize); rows];
+        for (x, v) in points.position.iter().zip(&points.velocity) {
+            let r = (x.y / cell) as usize;
+            if r < rows {
+                sums[r].0 += v.x;
+                sums[r].1 += 1;
+            }
+        }
+        let errors: Vec<f64> = sums
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.1 > 0)
+            .map(|(r, s)| s.0 / s.1 as f64 - b.speed((r as f64 + 0.5) * cell))
+            .collect();
+        let ms = errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64;
+        ms.sqrt() / b.surface_speed()
+    });
+    ChuteState {
+        top,
+        volume_ratio: volume / (width * top),
+        disconnected_bulk,
+        disconnected: (0..n).filter(|&k| gas(k)).count() as f64 / n as f64,
+        mean_speed,
+        speed_95: speeds[(0.95 * (n - 1) as f64) as usize],
+        profile_error,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The numbers of the dense-flow issue: at 25 degrees on a 0.1 m layer I = 0.309 and
+    /// u_s = 3.45 m/s; and the profile's slope is the mu(I) shear rate at each depth.
+    #[test]
+    fn the_profile_is_the_mu_i_solution() {
+        let m = ps1();
+        let b = Bagnold::new(&m, 25f64.to_radians(), 0.1, 9.81).unwrap();
+        assert!((b.inertial_number - 0.3088).abs() < 1e-4, "{}", b.inertial_number);
+        assert!((b.surface_speed() - 3.451).abs() < 2e-3, "{}", b.surface_speed());
+        for y in [0.01, 0.05, 0.09] {
+            let rate = (b.speed(y + 1e-6) - b.speed(y - 1e-6)) / 2e-6;
+            let p = m.critical_density * 9.81 * b.angle.cos() * (0.1 - y);
+            let i = rate * m.grain_diameter * (m.grain_density / p).sqrt();
+            assert!((i - b.inertial_number).abs() < 1e-6, "I = {i} at y = {y}");
+        }
+        assert!(Bagnold::new(&m, 15f64.to_radians(), 0.1, 9.81).is_none());
+        assert!(Bagnold::new(&m, 35f64.to_radians(), 0.1, 9.81).is_none());
+    }
+}
