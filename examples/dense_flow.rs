@@ -30,14 +30,19 @@ fn main() {
         std::process::exit(2);
     }
     let (angles, resolutions, end) = (list(&args[0]), list(&args[1]), list(&args[2])[0]);
-    let every = args.get(3).filter(|a| !a.starts_with("--")).map_or(1.0, |a| list(a)[0]);
+    let every = args
+        .get(3)
+        .filter(|a| !a.starts_with("--"))
+        .map_or(1.0, |a| list(a)[0]);
     let extra: Vec<String> = args
         .windows(2)
         .filter(|w| w[0] == "--set")
         .map(|w| w[1].clone())
         .collect();
     let material = ps1();
-    println!("| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | wall (s) |");
+    println!(
+        "| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | wall (s) |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for &deg in &angles {
         for &per_depth in &resolutions {
@@ -50,7 +55,8 @@ fn main() {
                 format!("time.end={end}"),
             ];
             sets.extend(extra.iter().cloned());
-            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
+            let path =
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
             let scene = match Scene::load(&path, &sets, &Regolith::default().registries()) {
                 Ok((s, _)) => s,
                 Err(e) => {
@@ -61,10 +67,16 @@ fn main() {
             let profile = Bagnold::new(&material, th, DEPTH, 9.81);
             let mut sim = Simulation::new(&scene);
             let cell = sim.grid().cell_size;
-            start_steady(&mut sim.points_mut("layer").unwrap(), &material, gravity, DEPTH, profile.as_ref());
+            start_steady(
+                &mut sim.points_mut("layer").unwrap(),
+                &material,
+                gravity,
+                DEPTH,
+                profile.as_ref(),
+            );
             let started = std::time::Instant::now();
             let mut next = 0.0;
-            let mut row = |sim: &mut Simulation, last: bool| {
+            let row = |sim: &mut Simulation, last: bool| {
                 let mut q = sim.world.query::<(&Points, &PointStates)>();
                 let (p, s) = q.single(&sim.world).expect("one body");
                 let m: ChuteState = measure(p, s, scene.domain.size.x, cell, profile.as_ref());

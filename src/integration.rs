@@ -36,6 +36,10 @@ pub struct AxisWeights {
 pub trait Scheme: Send + Sync + 'static {
     /// The scheme's name in a scene file.
     const NAME: &'static str;
+    /// Whether the APIC affine matrix `B D^-1` is exactly the velocity gradient for these
+    /// weights (true of bilinear weights, Jiang et al. 2015), so the gradient is taken: the
+    /// same matrix, without `D`'s ill-conditioning next to a node line.
+    const AFFINE_IS_GRADIENT: bool = false;
     /// 1D weights at coordinate `xi` (cell units from the origin) for a point of half-width
     /// `alpha` (cell units) on an axis of `cells` cells.
     fn axis(xi: f64, alpha: f64, cells: usize, periodic: bool) -> AxisWeights;
@@ -72,6 +76,7 @@ pub fn fast_floor(x: f64) -> f64 {
 
 impl Scheme for Linear {
     const NAME: &'static str = "Linear";
+    const AFFINE_IS_GRADIENT: bool = true;
     #[inline]
     fn axis(xi: f64, _alpha: f64, cells: usize, periodic: bool) -> AxisWeights {
         let n = cells as f64;
@@ -255,7 +260,13 @@ impl Footprint {
         dx: &[f64; 3],
         dy: &[f64; 3],
     ) -> (DVec2, DMat2, DMat2) {
-        let (mut value, mut gx, mut gy, mut bx, mut by) = (DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, DVec2::ZERO, DVec2::ZERO);
+        let (mut value, mut gx, mut gy, mut bx, mut by) = (
+            DVec2::ZERO,
+            DVec2::ZERO,
+            DVec2::ZERO,
+            DVec2::ZERO,
+            DVec2::ZERO,
+        );
         for ky in 0..3 {
             let (mut along, mut along_dx, mut along_x) = (DVec2::ZERO, DVec2::ZERO, DVec2::ZERO);
             for kx in 0..3 {

@@ -3,7 +3,8 @@
 //!
 //! * An affine velocity field on the grid comes back to a point exactly: its velocity is
 //!   the field at the point and its affine matrix `C_p` is the field's gradient.
-//! * The gather conserves angular momentum: with `C_p = B_p D_p^-1` the points' angular
+//! * The gather conserves angular momentum: with `C_p = B_p D_p^-1` (the velocity gradient
+//!   for bilinear weights) the points' angular
 //!   momentum, `sum_p m_p (x_p x v_p + (C_p D_p)_yx - (C_p D_p)_xy)`, equals the grid's,
 //!   `sum_i m_i x_i x v_i`, whatever the nodal velocities.
 //! * The scatter conserves linear and angular momentum: the grid momentum of a step's
@@ -71,10 +72,18 @@ fn affine_field_comes_back<S: Scheme>() {
     let half = 0.25 * grid.cell_size;
     for x in interior_points(&grid, &mut rng, 500) {
         let f = Footprint::new::<S>(&grid, x, half);
-        let (v, l, c) = apic_gather(&f, &grid, x, &nodal);
-        assert!((v - (v0 + a * x)).length() < 1e-13, "{}: v {v} at {x}", S::NAME);
+        let (v, l, c) = apic_gather::<S>(&f, &grid, x, &nodal);
+        assert!(
+            (v - (v0 + a * x)).length() < 1e-13,
+            "{}: v {v} at {x}",
+            S::NAME
+        );
         for (name, m) in [("C", c), ("L", l)] {
-            let err = (m - a).to_cols_array().iter().map(|e| e.abs()).fold(0.0, f64::max);
+            let err = (m - a)
+                .to_cols_array()
+                .iter()
+                .map(|e| e.abs())
+                .fold(0.0, f64::max);
             assert!(err < 1e-11, "{}: {name} off by {err:e} at {x}", S::NAME);
         }
     }
@@ -87,7 +96,14 @@ fn an_affine_field_comes_back_exactly() {
 }
 
 /// `m (x x v + (C D)_yx - (C D)_xy)`: a point's APIC angular momentum (z component).
-fn point_angular_momentum(f: &Footprint, grid: &GridGeometry, x: DVec2, m: f64, v: DVec2, c: DMat2) -> f64 {
+fn point_angular_momentum(
+    f: &Footprint,
+    grid: &GridGeometry,
+    x: DVec2,
+    m: f64,
+    v: DVec2,
+    c: DMat2,
+) -> f64 {
     let (dx, dy) = f.offsets(grid, x);
     let b = c * f.affine_inertia(&dx, &dy);
     m * (x.perp_dot(v) + b.x_axis.y - b.y_axis.x)
@@ -105,10 +121,12 @@ fn gather_keeps_angular_momentum<S: Scheme>() {
         let m = 1.0 + 0.5 * rng.next();
         let f = Footprint::new::<S>(&grid, x, half);
         f.for_each_entry(|n, w, _| node_mass[n] += w * m);
-        let (v, _, c) = apic_gather(&f, &grid, x, &nodal);
+        let (v, _, c) = apic_gather::<S>(&f, &grid, x, &nodal);
         points += point_angular_momentum(&f, &grid, x, m, v, c);
     }
-    let on_grid: f64 = (0..nodes.len()).map(|n| node_mass[n] * nodes[n].perp_dot(nodal[n])).sum();
+    let on_grid: f64 = (0..nodes.len())
+        .map(|n| node_mass[n] * nodes[n].perp_dot(nodal[n]))
+        .sum();
     assert!(
         (points - on_grid).abs() < 1e-11 * on_grid.abs().max(1.0),
         "{}: points {points}, grid {on_grid}",
@@ -166,8 +184,15 @@ fn the_scatter_conserves_momentum_and_angular_momentum() {
         let nodes = node_positions(&grid);
         let field = sim.grid_field("disc").unwrap();
         let on_grid: DVec2 = field.momentum.iter().sum();
-        let on_grid_angular: f64 = nodes.iter().zip(&field.momentum).map(|(x, p)| x.perp_dot(*p)).sum();
-        assert!((on_grid - momentum).length() < 1e-12 * momentum.length().max(1.0), "{integration}: momentum {on_grid} vs {momentum}");
+        let on_grid_angular: f64 = nodes
+            .iter()
+            .zip(&field.momentum)
+            .map(|(x, p)| x.perp_dot(*p))
+            .sum();
+        assert!(
+            (on_grid - momentum).length() < 1e-12 * momentum.length().max(1.0),
+            "{integration}: momentum {on_grid} vs {momentum}"
+        );
         assert!(
             (on_grid_angular - angular).abs() < 1e-11 * angular.abs().max(1.0),
             "{integration}: angular momentum {on_grid_angular} vs {angular}"

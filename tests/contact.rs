@@ -212,6 +212,7 @@ fn intruder_settles_on_an_elastic_bed() {
         time: (end: 0.5, step: Cfl(0.5), output_every: 0.005),
         walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),
         contact: Frictional(friction: 0.1),
+        flip: 0.95,
         bodies: [
             (name: "bed", shape: Rectangle(min: (0.0, 0.0), max: (0.4, 0.1)),
              material: LinearElastic(density: 1500.0, youngs_modulus: 2e6, poisson_ratio: 0.3),

@@ -1,15 +1,23 @@
-//! Dense granular flow at the default numerics, long enough to see a layer lose its state.
+//! Dense granular flow, long enough to see a layer lose its state.
 //!
-//! The failures these guard against take seconds of simulated time: with FLIP and the
-//! per-point pressure the chute layer packed into 57% of its height within 5 s while its
-//! point volumes still said `rho = rho_c`, and most of it disconnected (docs/numerics.md,
+//! The failures these guard against take seconds of simulated time: at the default
+//! numerics (FLIP) the chute layer packed into 57% of its height within 5 s while its point
+//! volumes still said `rho = rho_c`, and most of it disconnected (docs/numerics.md,
 //! "Dense flow"). A test of a few hundred steps cannot see that; these run 10^5 steps and
 //! more on a coarse grid (10 cells per depth; the resolution study is in
 //! docs/VALIDATION.md, `cargo run --release --example dense_flow`).
+//!
+//! They run with `transfer: Apic`, which holds these flows; FLIP, still the default, fails
+//! the steady-flow test within 3 s. APIC is not the default yet because it moves the far
+//! surface of the coarse flow-field bed and leaves more of a thrown block disconnected
+//! (docs/VALIDATION.md, "Steady chute flow"); until it is, these tests say which transfer
+//! holds a dense flow, and the issue stays open.
 
 use regolith::body::{PointStates, Points};
 use regolith::glam::DVec2;
-use regolith::verify::chute::{Bagnold, ChuteState, least_acceleration, measure, ps1, start_steady};
+use regolith::verify::chute::{
+    Bagnold, ChuteState, least_acceleration, measure, ps1, start_steady,
+};
 use regolith::{Regolith, Scene, Simulation};
 
 const DEPTH: f64 = 0.1;
@@ -17,13 +25,19 @@ const DEPTH: f64 = 0.1;
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth), run for `end`
 /// seconds from the lithostatic state, moving with `profile` if given; `each` sees the
 /// measures every 0.25 s. Returns the number of steps.
-fn run_chute(deg: f64, end: f64, profile: Option<&Bagnold>, mut each: impl FnMut(f64, &ChuteState)) -> u64 {
+fn run_chute(
+    deg: f64,
+    end: f64,
+    profile: Option<&Bagnold>,
+    mut each: impl FnMut(f64, &ChuteState),
+) -> u64 {
     let th = deg.to_radians();
     let gravity = DVec2::new(9.81 * th.sin(), -9.81 * th.cos());
     let sets = [
         format!("gravity=({}, {})", gravity.x, gravity.y),
         "domain.cells=(5, 15)".to_string(),
         format!("time.end={end}"),
+        "transfer=Apic".to_string(),
     ];
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
     let scene = Scene::load(&path, &sets, &Regolith::default().registries())
@@ -31,7 +45,13 @@ fn run_chute(deg: f64, end: f64, profile: Option<&Bagnold>, mut each: impl FnMut
         .0;
     let mut sim = Simulation::new(&scene);
     let cell = sim.grid().cell_size;
-    start_steady(&mut sim.points_mut("layer").unwrap(), &ps1(), gravity, DEPTH, profile);
+    start_steady(
+        &mut sim.points_mut("layer").unwrap(),
+        &ps1(),
+        gravity,
+        DEPTH,
+        profile,
+    );
     let mut next = 0.0;
     while !sim.finished() {
         sim.step().unwrap_or_else(|e| panic!("{deg} degrees: {e}"));
@@ -55,29 +75,57 @@ fn a_steady_chute_flow_stays_steady_and_dense() {
     let profile = Bagnold::new(&ps1(), 25f64.to_radians(), DEPTH, 9.81).unwrap();
     let mut worst_error: f64 = 0.0;
     let steps = run_chute(25.0, 5.0, Some(&profile), |t, m| {
-        assert!((m.top / DEPTH - 1.0).abs() < 0.01, "t = {t:.2} s: top at {:.4} m", m.top);
-        assert!((m.volume_ratio - 1.0).abs() < 0.01, "t = {t:.2} s: sum V / area = {:.4}", m.volume_ratio);
-        assert_eq!(m.disconnected_bulk, 0.0, "t = {t:.2} s: bulk points disconnected");
+        assert!(
+            (m.top / DEPTH - 1.0).abs() < 0.01,
+            "t = {t:.2} s: top at {:.4} m",
+            m.top
+        );
+        assert!(
+            (m.volume_ratio - 1.0).abs() < 0.01,
+            "t = {t:.2} s: sum V / area = {:.4}",
+            m.volume_ratio
+        );
+        assert_eq!(
+            m.disconnected_bulk, 0.0,
+            "t = {t:.2} s: bulk points disconnected"
+        );
         worst_error = worst_error.max(m.profile_error.unwrap());
     });
     assert!(steps > 100_000, "{steps} steps");
-    assert!(worst_error < 0.05, "profile rms error {worst_error:.3} of u_s");
+    assert!(
+        worst_error < 0.05,
+        "profile rms error {worst_error:.3} of u_s"
+    );
 }
 
 /// 15 degrees, below atan(mu_s) = 17.7: a layer thrown down the slope at the 25-degree
-/// profile (surface speed 3.45 m/s) stops and stays dense.
+/// profile (mean speed 2.07 m/s) stops and stays dense. The base resists at least
+/// `mu_s p`, so the layer slows at least at `g (mu_s cos th - sin th) = 0.49 m/s^2`:
+/// stopped within 4.2 s; the test looks at 6 s.
 #[test]
 fn below_the_static_friction_angle_the_layer_stops() {
     let thrown = Bagnold::new(&ps1(), 25f64.to_radians(), DEPTH, 9.81).unwrap();
     let mut last = ChuteState::default();
-    run_chute(15.0, 2.0, Some(&thrown), |_, m| last = *m);
-    assert!(last.speed_95 < 0.01, "95% of the points slower than {} m/s", last.speed_95);
-    assert!(last.disconnected < 0.05, "{} disconnected", last.disconnected);
-    assert!((last.top / DEPTH - 1.0).abs() < 0.01, "top at {:.4} m", last.top);
+    run_chute(15.0, 6.0, Some(&thrown), |_, m| last = *m);
+    assert!(
+        last.speed_95 < 0.01,
+        "95% of the points slower than {} m/s",
+        last.speed_95
+    );
+    assert!(
+        last.disconnected < 0.05,
+        "{} disconnected",
+        last.disconnected
+    );
+    assert!(
+        (last.top / DEPTH - 1.0).abs() < 0.01,
+        "top at {:.4} m",
+        last.top
+    );
 }
 
 /// 35 degrees, above atan(mu_2) = 30.9: no steady state; the base resists at most mu_2 p,
-/// so the layer's mean speed grows at least at g (sin th - mu_2 cos th) = 1.09 m/s^2.
+/// so the layer's mean speed grows at least at g (sin th - mu_2 cos th) = 0.82 m/s^2.
 #[test]
 fn above_the_dynamic_friction_angle_the_layer_accelerates() {
     let th = 35f64.to_radians();
@@ -86,6 +134,10 @@ fn above_the_dynamic_friction_angle_the_layer_accelerates() {
     let bound = least_acceleration(&ps1(), th, 9.81);
     for w in speeds.windows(2).skip(1) {
         let rate = (w[1].1 - w[0].1) / (w[1].0 - w[0].0);
-        assert!(rate > bound, "mean speed grew at {rate:.3} m/s^2 at t = {:.2} s (at least {bound:.3})", w[1].0);
+        assert!(
+            rate > bound,
+            "mean speed grew at {rate:.3} m/s^2 at t = {:.2} s (at least {bound:.3})",
+            w[1].0
+        );
     }
 }

@@ -114,6 +114,7 @@ fn thrown_grains_disconnect_and_re_densify_on_landing() {
         domain: (size: (0.3, 0.5), cells: (30, 50)),
         time: (end: 0.6, step: Cfl(0.5), output_every: 0.01),
         walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),
+        flip: 0.95,
         bodies: [(
             name: "grains",
             shape: Rectangle(min: (0.05, 0.0), max: (0.25, 0.1)),

@@ -3,7 +3,7 @@
 //! Mass: `sum_i m_i = sum_p m_p` because the weights are a partition of unity. Momentum: the
 //! nodal forces of a stress field sum to zero (gradients sum to zero), so without gravity a
 //! step leaves `sum_p m_p v_p` unchanged whatever the stresses and velocities, for FLIP
-//! (`sum_p m_p sum_i S a_i = sum_i f_i = 0`) and PIC (`sum_p m_p sum_i S v_i = sum_i m_i v_i`).
+//! (`sum_p m_p sum_i S a_i = sum_i f_i = 0`), PIC and APIC (`sum_p m_p sum_i S v_i = sum_i m_i v_i`).
 //!
 //! Power: the internal forces' power on the new nodal velocities equals the stress power
 //! the points see, `sum_i f_i . v_i = -sum_p V_p T_p : L_p`, for either dilatation rule. With
@@ -26,7 +26,8 @@ impl Rng {
     }
 }
 
-fn scene(integration: &str, update: &str, flip: f64, dilatation: &str) -> regolith::Scene {
+/// `transfer` is the scene's transfer setting, e.g. `Apic` or `Flip, flip: 0.0`.
+fn scene(integration: &str, update: &str, transfer: &str, dilatation: &str) -> regolith::Scene {
     parse_scene(&format!(
         r#"(
         name: "conservation",
@@ -36,7 +37,7 @@ fn scene(integration: &str, update: &str, flip: f64, dilatation: &str) -> regoli
         walls: (left: Free, right: Free, bottom: Free, top: Free),
         integration: {integration},
         update: {update},
-        flip: {flip},
+        transfer: {transfer},
         dilatation: {dilatation},
         bodies: [(
             name: "disc",
@@ -81,7 +82,7 @@ fn scramble(sim: &mut Simulation) {
 fn internal_force_power_equals_stress_power() {
     for integration in ["Linear", "CpdiFixed"] {
         for dilatation in ["PerPoint", "CellAveraged"] {
-            let mut sim = Simulation::new(&scene(integration, "Usl", 1.0, dilatation));
+            let mut sim = Simulation::new(&scene(integration, "Usl", "Flip", dilatation));
             scramble(&mut sim);
             let (stress, volume) = {
                 let p = sim.points("disc").unwrap();
@@ -114,15 +115,15 @@ fn internal_force_power_equals_stress_power() {
 fn one_step_conserves_mass_and_momentum() {
     for integration in ["Linear", "CpdiFixed"] {
         for update in ["Usl", "Musl"] {
-            for flip in [0.0, 1.0] {
-                let mut sim = Simulation::new(&scene(integration, update, flip, "PerPoint"));
+            for transfer in ["Flip, flip: 0.0", "Flip, flip: 1.0", "Apic"] {
+                let mut sim = Simulation::new(&scene(integration, update, transfer, "PerPoint"));
                 scramble(&mut sim);
                 let before = momentum(&mut sim);
                 let point_mass: f64 = sim.points("disc").unwrap().mass.iter().sum();
                 sim.step().unwrap();
                 let node_mass: f64 = sim.grid_field("disc").unwrap().mass.iter().sum();
                 let after = momentum(&mut sim);
-                let tag = format!("{integration} {update} flip {flip}");
+                let tag = format!("{integration} {update} {transfer}");
                 assert!(
                     (node_mass - point_mass).abs() < 1e-13 * point_mass,
                     "{tag}: grid mass {node_mass} vs points {point_mass}"

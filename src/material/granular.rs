@@ -2,11 +2,6 @@
 //! the yield surface, mu(I) plastic flow on it, and a stress-free disconnected phase below
 //! the critical density or in tension.
 //!
-//! The dense phase's pressure is a function of the density, `p = K ln(rho / rho_c)`: the
-//! paper's hypoelastic volumetric rate integrated from the critical state, so it is the
-//! same law, but it cannot drift away from the density the phase test reads
-//! (docs/numerics.md, "Dense flow").
-//!
 //! Two scene names share one update: `MuI` (the paper's rate-dependent model) and
 //! `DruckerPrager` (appendix A: the same code with `mu_2 = mu_s`, rate independent).
 //!
@@ -53,16 +48,14 @@ impl TransPhase {
         gdp * self.grain_diameter * (self.grain_density / p).sqrt()
     }
 
-    /// One step of the update at one point (SCIENCE.md 4, steps 1-5), with the pressure
-    /// of the density the step hands over (`pressure_at`) in place of the trial's: the
-    /// Jaumann trial supplies the deviator only.
+    /// One step of the update at one point (SCIENCE.md 4, steps 1-5).
     pub fn update(&self, stress: &mut Stress, step: &PointStep) -> PointOutcome {
         let (g, dt) = (self.shear, step.dt);
         let trial = stress.jaumann_elastic_trial(step.velocity_gradient, dt, g, self.bulk);
+        let p = trial.pressure();
         let dev = trial.deviator();
         let tau_trial = trial.equivalent_shear();
-        let p = self.pressure_at(step.density);
-        if p <= 0.0 {
+        if step.density < self.critical_density || p <= 0.0 {
             *stress = Stress::ZERO;
             return PointOutcome {
                 plastic_strain_rate: tau_trial / (g * dt),
@@ -70,7 +63,7 @@ impl TransPhase {
             };
         }
         if tau_trial <= self.mu_s * p {
-            *stress = dev + Stress::isotropic(p);
+            *stress = trial;
             return PointOutcome {
                 plastic_strain_rate: 0.0,
                 phase: Phase::Solid,
@@ -87,17 +80,6 @@ impl TransPhase {
             plastic_strain_rate: ((tau_trial - tau) / (g * dt)).max(0.0),
             phase: Phase::Flowing,
         }
-    }
-
-    /// The dense phase's pressure at density `rho`, `p = K ln(rho / rho_c)`: the hypoelastic
-    /// volumetric law `dp = -K tr(D) dt` integrated along `d ln rho = -tr(D) dt` from the
-    /// critical state, where a point enters the dense phase stress free. Taking the
-    /// pressure from the density, rather than summing the increments, keeps the two equal
-    /// whatever density the step hands the material (a cell's, with the cell-averaged
-    /// dilatation): compaction is always resisted, and the phase test `rho < rho_c` is the
-    /// same as `p < 0` (docs/numerics.md).
-    pub fn pressure_at(&self, rho: f64) -> f64 {
-        self.bulk * (rho / self.critical_density).ln()
     }
 
     /// Quiet start: the volume at which density and pressure agree with the hypoelastic law,

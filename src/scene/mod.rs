@@ -97,14 +97,14 @@ pub enum StressUpdate {
 /// The grid-to-point velocity transfer (docs/numerics.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 pub enum Transfer {
-    /// FLIP: each point keeps its velocity and adds the grid's acceleration, optionally
-    /// blended with PIC by `flip` (the paper's transfer).
-    Flip,
-    /// APIC (Jiang et al. 2015), the default: each point takes the grid velocity at its
-    /// position and the affine field `C_p` around it, which it hands back to the grid in
-    /// the next scatter. Conserves linear and angular momentum and reproduces affine
-    /// fields; unlike a FLIP/PIC blend it has no damping set per step.
+    /// FLIP (the paper's transfer, the default): each point keeps its velocity and adds the
+    /// grid's acceleration, optionally blended with PIC by `flip`.
     #[default]
+    Flip,
+    /// APIC (Jiang et al. 2015): each point takes the grid velocity at its position and the
+    /// affine field `C_p` around it, which it hands back to the grid in the next scatter.
+    /// Conserves linear and angular momentum and reproduces affine fields; unlike a
+    /// FLIP/PIC blend it has no damping set per step.
     Apic,
 }
 

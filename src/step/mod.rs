@@ -224,15 +224,25 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: StepOptions) {
             schedule.add_systems(transfer::grid_to_particle.in_set(gather.0).in_set(gather.1));
         }
         (StressUpdate::Usl, Transfer::Apic) => {
-            schedule.add_systems(transfer::apic_to_particle.in_set(gather.0).in_set(gather.1));
+            schedule.add_systems(
+                transfer::apic_to_particle::<S>
+                    .in_set(gather.0)
+                    .in_set(gather.1),
+            );
         }
         (StressUpdate::Musl, transfer) => {
-            let velocity = match transfer {
-                Transfer::Flip => transfer::musl_velocity.into_configs(),
-                Transfer::Apic => transfer::musl_apic_velocity.into_configs(),
+            let (velocity, gradient) = match transfer {
+                Transfer::Flip => (
+                    transfer::musl_velocity.into_configs(),
+                    transfer::musl_gradient.into_configs(),
+                ),
+                Transfer::Apic => (
+                    transfer::musl_apic_velocity.into_configs(),
+                    transfer::musl_apic_gradient::<S>.into_configs(),
+                ),
             };
             schedule.add_systems(
-                (velocity, transfer::musl_remap, transfer::musl_gradient)
+                (velocity, transfer::musl_remap, gradient)
                     .chain()
                     .in_set(gather.0)
                     .in_set(gather.1),

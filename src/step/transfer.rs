@@ -20,7 +20,7 @@ use super::grid_update::apply_walls;
 use super::locate::Location;
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
-use crate::integration::Footprint;
+use crate::integration::{Footprint, Scheme};
 use crate::scene::Wall;
 use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
 
@@ -136,31 +136,28 @@ pub fn grid_to_particle(
 
 /// The APIC gather at one point: the grid velocity `v`, the velocity gradient `L` and the
 /// affine matrix `C = B D^-1` (Jiang et al. 2015), with `B = sum S_i v_i d_i^T` and
-/// `D = sum S_i d_i d_i^T`. For bilinear weights `B D^-1` equals `L` wherever `D` is
-/// invertible; `D` is singular only for a `Linear` point exactly on a node line, where `L`
-/// is taken. CPDI's `D` is never singular (its diagonal is at least `a^2/3`).
+/// `D = sum S_i d_i d_i^T`. For bilinear weights `B D^-1` is `L` itself, which is taken
+/// (`Scheme::AFFINE_IS_GRADIENT`): their `D` vanishes on node lines. CPDI's `D` has a
+/// diagonal of at least `a^2/3`, so it is always invertible.
 #[inline]
-pub fn apic_gather(
+pub fn apic_gather<S: Scheme>(
     f: &Footprint,
     grid: &GridGeometry,
     x: DVec2,
     velocity: &[DVec2],
 ) -> (DVec2, DMat2, DMat2) {
+    if S::AFFINE_IS_GRADIENT {
+        let (v, l) = f.interpolate_with_gradient(velocity);
+        return (v, l, l);
+    }
     let (dx, dy) = f.offsets(grid, x);
     let (v, l, b) = f.interpolate_affine(velocity, &dx, &dy);
-    let d = f.affine_inertia(&dx, &dy);
-    let h2 = grid.cell_size * grid.cell_size;
-    let c = if d.determinant() > 1e-12 * h2 * h2 {
-        b * d.inverse()
-    } else {
-        l
-    };
-    (v, l, c)
+    (v, l, b * f.affine_inertia(&dx, &dy).inverse())
 }
 
 /// USL with APIC: the point takes the grid velocity and its affine field, in one pass with
 /// the velocity gradient.
-pub fn apic_to_particle(
+pub fn apic_to_particle<S: Scheme>(
     grid: Res<GridGeometry>,
     mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
@@ -173,9 +170,14 @@ pub fn apic_to_particle(
             .zip(points.position.par_iter())
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
-            .zip(points.velocity_gradient.par_iter_mut().zip(points.affine.par_iter_mut()))
+            .zip(
+                points
+                    .velocity_gradient
+                    .par_iter_mut()
+                    .zip(points.affine.par_iter_mut()),
+            )
             .for_each(|((((f, &x), v), adv), (l, c))| {
-                let (v_grid, grad, affine) = apic_gather(f, grid, x, &field.velocity);
+                let (v_grid, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
                 *v = v_grid;
                 *adv = v_grid;
                 *l = grad;
@@ -184,25 +186,20 @@ pub fn apic_to_particle(
     }
 }
 
-/// MUSL pass 1 with APIC: the point's velocity and affine field from the grid.
-pub fn musl_apic_velocity(
-    grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &Location, &GridField)>,
-) {
-    let grid = &*grid;
+/// MUSL pass 1 with APIC: the point takes the grid velocity. Its affine field is taken in
+/// pass 3 from the remapped velocities, like `L` and for the same reason (nodes of tiny
+/// mass); the remap in between still uses the previous step's.
+pub fn musl_apic_velocity(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
     for (mut points, location, field) in &mut bodies {
         let points = &mut *points;
         location
             .footprint
             .par_iter()
-            .zip(points.position.par_iter())
             .zip(points.velocity.par_iter_mut())
-            .zip(points.advection.par_iter_mut().zip(points.affine.par_iter_mut()))
-            .for_each(|(((f, &x), v), (adv, c))| {
-                let (v_grid, _, affine) = apic_gather(f, grid, x, &field.velocity);
-                *v = v_grid;
-                *adv = v_grid;
-                *c = affine;
+            .zip(points.advection.par_iter_mut())
+            .for_each(|((f, v), adv)| {
+                *v = f.interpolate(&field.velocity);
+                *adv = *v;
             });
     }
 }
@@ -273,6 +270,32 @@ pub fn musl_gradient(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
             .par_iter()
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(f, l)| *l = f.interpolate_with_gradient(&field.velocity).1);
+    }
+}
+
+/// MUSL pass 3 with APIC: `L` and the affine field from the remapped velocities.
+pub fn musl_apic_gradient<S: Scheme>(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+) {
+    let grid = &*grid;
+    for (mut points, location, field) in &mut bodies {
+        let points = &mut *points;
+        location
+            .footprint
+            .par_iter()
+            .zip(points.position.par_iter())
+            .zip(
+                points
+                    .velocity_gradient
+                    .par_iter_mut()
+                    .zip(points.affine.par_iter_mut()),
+            )
+            .for_each(|((f, &x), (l, c))| {
+                let (_, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
+                *l = grad;
+                *c = affine;
+            });
     }
 }
 

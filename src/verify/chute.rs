@@ -156,10 +156,16 @@ pub fn measure(
     let top = heights[(0.99 * (n - 1) as f64) as usize] + 0.5 * spacing;
     let volume: f64 = points.volume.iter().sum();
     let gas = |k: usize| states.phase[k] == Phase::Disconnected;
-    let bulk: Vec<usize> = (0..n).filter(|&k| points.position[k].y < top - cell).collect();
-    let disconnected_bulk = bulk.iter().filter(|&&k| gas(k)).count() as f64 / bulk.len().max(1) as f64;
+    let bulk: Vec<usize> = (0..n)
+        .filter(|&k| points.position[k].y < top - cell)
+        .collect();
+    let disconnected_bulk =
+        bulk.iter().filter(|&&k| gas(k)).count() as f64 / bulk.len().max(1) as f64;
     let mass: f64 = points.mass.iter().sum();
-    let mean_speed = (0..n).map(|k| points.mass[k] * points.velocity[k].x).sum::<f64>() / mass;
+    let mean_speed = (0..n)
+        .map(|k| points.mass[k] * points.velocity[k].x)
+        .sum::<f64>()
+        / mass;
     let mut speeds: Vec<f64> = points.velocity.iter().map(|v| v.length()).collect();
     speeds.sort_by(f64::total_cmp);
     let profile_error = profile.map(|b| {
@@ -202,8 +208,16 @@ mod tests {
     fn the_profile_is_the_mu_i_solution() {
         let m = ps1();
         let b = Bagnold::new(&m, 25f64.to_radians(), 0.1, 9.81).unwrap();
-        assert!((b.inertial_number - 0.3088).abs() < 1e-4, "{}", b.inertial_number);
-        assert!((b.surface_speed() - 3.451).abs() < 2e-3, "{}", b.surface_speed());
+        assert!(
+            (b.inertial_number - 0.3088).abs() < 1e-4,
+            "{}",
+            b.inertial_number
+        );
+        assert!(
+            (b.surface_speed() - 3.451).abs() < 2e-3,
+            "{}",
+            b.surface_speed()
+        );
         for y in [0.01, 0.05, 0.09] {
             let rate = (b.speed(y + 1e-6) - b.speed(y - 1e-6)) / 2e-6;
             let p = m.critical_density * 9.81 * b.angle.cos() * (0.1 - y);
