@@ -10,26 +10,15 @@
 //! * The scatter conserves linear and angular momentum: the grid momentum of a step's
 //!   scatter has the points' total momentum and angular momentum.
 
+mod common;
+
+use common::Rng;
 use regolith::Simulation;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
 use regolith::integration::{CpdiFixed, Footprint, Linear, Scheme};
 use regolith::plugin::parse_scene;
 use regolith::step::transfer::apic_gather;
-
-/// A small deterministic generator (xorshift), uniform in [-1, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec(&mut self) -> DVec2 {
-        DVec2::new(self.next(), self.next())
-    }
-}
 
 fn grid() -> GridGeometry {
     GridGeometry {

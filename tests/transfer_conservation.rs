@@ -10,21 +10,13 @@
 //! the cell-averaged `tr L` this holds only if the scatter uses the cell-mean trace of the
 //! stress (the B-bar pair); otherwise the step creates or destroys energy.
 
+mod common;
+
+use common::Rng;
 use regolith::Simulation;
 use regolith::glam::DVec2;
 use regolith::plugin::parse_scene;
 use regolith::stress::Stress;
-
-/// A small deterministic generator (xorshift), uniform in [-1, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-}
 
 /// `transfer` is the scene's transfer setting, e.g. `Apic` or `Flip, flip: 0.0`.
 fn scene(integration: &str, update: &str, transfer: &str, dilatation: &str) -> regolith::Scene {

@@ -42,3 +42,17 @@ pub fn full_model_coarse_with(extra: &[&str]) -> Scene {
 pub fn bed_and_disc_fingerprints(sim: &mut Simulation) -> [u64; 2] {
     ["bed", "disc"].map(|name| sim.points(name).unwrap().fingerprint())
 }
+
+/// A small deterministic generator (xorshift), uniform in [-1, 1).
+pub struct Rng(pub u64);
+impl Rng {
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+    pub fn vec(&mut self) -> regolith::glam::DVec2 {
+        regolith::glam::DVec2::new(self.next(), self.next())
+    }
+}
