@@ -28,7 +28,6 @@ pub struct Points {
     pub advection: Vec<DVec2>,
     /// The affine part of the point's velocity field, `C_p` (1/s), carried from step to
     /// step by the APIC transfer (`transfer: Apic`); empty with FLIP.
-    #[serde(default)]
     pub affine: Vec<DMat2>,
     /// The density the constitutive update sees (kg/m^3): `m/V`, or with cell-averaged
     /// dilatation the mean density of the points in the point's cell.
@@ -44,8 +43,11 @@ impl Points {
         self.position.is_empty()
     }
 
-    /// Bytes held per point (for memory estimates), not counting material history.
+    /// Bytes held per point (for memory estimates), not counting material history or the
+    /// APIC affine matrix ([`Points::AFFINE_BYTES`]).
     pub const BYTES_PER_POINT: usize = 16 + 16 + 8 + 8 + 8 + 32 + 32 + 16 + 8;
+    /// Bytes of the affine matrix an APIC point carries besides.
+    pub const AFFINE_BYTES: usize = 32;
 
     /// A 64-bit fingerprint of the state that carries into the next step (positions,
     /// velocities, masses, volumes and stresses, bit for bit): equal fingerprints mean the

@@ -18,7 +18,7 @@ use crate::scene::Scene;
 use crate::sim::{Clock, Simulation};
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 1;
+const FORMAT: u32 = 2;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {

@@ -238,6 +238,10 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
     } else {
         0
     };
+    let affine = match scene.transfer {
+        crate::scene::Transfer::Apic => crate::body::Points::AFFINE_BYTES,
+        crate::scene::Transfer::Flip => 0,
+    };
     let counts: Vec<usize> = sim.bodies().iter().map(|b| b.2).collect();
     scene
         .bodies
@@ -245,6 +249,7 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
         .zip(counts)
         .map(|(spec, n)| {
             n * (crate::body::Points::BYTES_PER_POINT
+                + affine
                 + crate::integration::Footprint::BYTES
                 + spec.material.history_bytes())
                 + nodes

@@ -45,60 +45,103 @@ pub fn particle_to_grid(
         Option<&CellDilatation>,
     )>,
 ) {
-    let g = gravity.0;
-    let grid = &*grid;
     for (points, location, mut field, bands, cells) in &mut bodies {
-        let field = &mut *field;
-        let normals = !field.mass_gradient.is_empty();
-        let apic = !points.affine.is_empty();
-        let mass = Shared::new(&mut field.mass);
-        let momentum = Shared::new(&mut field.momentum);
-        let force = Shared::new(&mut field.force);
-        let gradient = Shared::new(&mut field.mass_gradient);
-        bands.for_each_phase(grid.periodic[1], |b| {
-            // Local copies: the stores below could otherwise alias the captured pointers,
-            // which the compiler then reloads for every entry.
-            let (mass, momentum, force, gradient) = (mass, momentum, force, gradient);
-            for &p in bands.points(b) {
-                let p = p as usize;
-                let f = &location.footprint[p];
-                let m = points.mass[p];
-                let mv = m * points.velocity[p];
-                let mg = m * g;
-                let vol = points.volume[p];
-                let mut t = points.stress[p];
-                if let Some(cells) = cells {
-                    let shift = 0.5 * (cells.trace_mean[location.cell[p] as usize] - t.xx - t.yy);
-                    t.xx += shift;
-                    t.yy += shift;
-                }
-                // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
-                let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
-                // APIC: the momentum of the point's affine field at each node, m C d_i.
-                let (mc, (dx, dy)) = if apic {
-                    (m * points.affine[p], f.offsets(grid, points.position[p]))
-                } else {
-                    (DMat2::ZERO, ([0.0; 3], [0.0; 3]))
-                };
-                f.for_each_indexed(|kx, ky, n, w, grad| {
-                    let affine = if apic {
-                        mc * DVec2::new(dx[kx], dy[ky])
-                    } else {
-                        DVec2::ZERO
-                    };
-                    // SAFETY: footprint nodes are in bounds, and bands scattering at the same
-                    // time touch disjoint node rows (bands module).
-                    unsafe {
-                        mass.add_at(n, w * m);
-                        momentum.add_at(n, w * (mv + affine));
-                        force.add_at(n, w * mg - grad.x * tx - grad.y * ty);
-                        if normals {
-                            gradient.add_at(n, m * grad);
-                        }
-                    }
-                });
+        // Monomorphised on the transfer, so FLIP's scatter carries no affine work.
+        let scatter = if points.affine.is_empty() {
+            scatter_body::<false>
+        } else {
+            scatter_body::<true>
+        };
+        scatter(&grid, gravity.0, points, location, &mut field, bands, cells);
+    }
+}
+
+/// One body's scatter for `particle_to_grid`; `APIC` says whether its points carry an
+/// affine field.
+fn scatter_body<const APIC: bool>(
+    grid: &GridGeometry,
+    g: DVec2,
+    points: &Points,
+    location: &Location,
+    field: &mut GridField,
+    bands: &Bands,
+    cells: Option<&CellDilatation>,
+) {
+    let normals = !field.mass_gradient.is_empty();
+    let mass = Shared::new(&mut field.mass);
+    let momentum = Shared::new(&mut field.momentum);
+    let force = Shared::new(&mut field.force);
+    let gradient = Shared::new(&mut field.mass_gradient);
+    bands.for_each_phase(grid.periodic[1], |b| {
+        // Local copies: the stores below could otherwise alias the captured pointers,
+        // which the compiler then reloads for every entry.
+        let (mass, momentum, force, gradient) = (mass, momentum, force, gradient);
+        for &p in bands.points(b) {
+            let p = p as usize;
+            let f = &location.footprint[p];
+            let m = points.mass[p];
+            let momentum_at = NodeMomentum::of::<APIC>(points, p, f, grid);
+            let mg = m * g;
+            let vol = points.volume[p];
+            let mut t = points.stress[p];
+            if let Some(cells) = cells {
+                let shift = 0.5 * (cells.trace_mean[location.cell[p] as usize] - t.xx - t.yy);
+                t.xx += shift;
+                t.yy += shift;
             }
+            // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
+            let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
+            f.for_each_indexed(|kx, ky, n, w, grad| {
+                // SAFETY: footprint nodes are in bounds, and bands scattering at the same
+                // time touch disjoint node rows (bands module).
+                unsafe {
+                    mass.add_at(n, w * m);
+                    momentum.add_at(n, w * momentum_at.at(kx, ky));
+                    force.add_at(n, w * mg - grad.x * tx - grad.y * ty);
+                    if normals {
+                        gradient.add_at(n, m * grad);
+                    }
+                }
+            });
+        }
+    });
+}
+
+/// The momentum a point hands to the nodes of its footprint: `m v`, plus with APIC the
+/// momentum of its affine field, `m C_p d_i` at the node of offset `d_i`.
+struct NodeMomentum {
+    mv: DVec2,
+    /// `m C_p` and the node offsets; `None` with FLIP.
+    affine: Option<(DMat2, [f64; 3], [f64; 3])>,
+}
+
+impl NodeMomentum {
+    /// Point `k`'s, with its affine field if `APIC`.
+    #[inline]
+    fn of<const APIC: bool>(
+        points: &Points,
+        k: usize,
+        f: &Footprint,
+        grid: &GridGeometry,
+    ) -> NodeMomentum {
+        let m = points.mass[k];
+        let affine = APIC.then(|| {
+            let (dx, dy) = f.offsets(grid, points.position[k]);
+            (m * points.affine[k], dx, dy)
         });
+        NodeMomentum {
+            mv: m * points.velocity[k],
+            affine,
+        }
+    }
+
+    /// The momentum at entry `(kx, ky)`, before the entry's weight.
+    #[inline(always)]
+    fn at(&self, kx: usize, ky: usize) -> DVec2 {
+        match &self.affine {
+            Some((mc, dx, dy)) => self.mv + *mc * DVec2::new(dx[kx], dy[ky]),
+            None => self.mv,
+        }
     }
 }
 
@@ -161,29 +204,41 @@ pub fn apic_to_particle<S: Scheme>(
     grid: Res<GridGeometry>,
     mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
-    let grid = &*grid;
     for (mut points, location, field) in &mut bodies {
-        let points = &mut *points;
-        location
-            .footprint
-            .par_iter()
-            .zip(points.position.par_iter())
-            .zip(points.velocity.par_iter_mut())
-            .zip(points.advection.par_iter_mut())
-            .zip(
-                points
-                    .velocity_gradient
-                    .par_iter_mut()
-                    .zip(points.affine.par_iter_mut()),
-            )
-            .for_each(|((((f, &x), v), adv), (l, c))| {
-                let (v_grid, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
+        gather_affine::<S>(&grid, &mut points, location, field, true);
+    }
+}
+
+/// `L` and the affine field `C_p` of every point from `field`'s velocities, and with
+/// `take_velocity` the point's velocity (and advection velocity) too.
+fn gather_affine<S: Scheme>(
+    grid: &GridGeometry,
+    points: &mut Points,
+    location: &Location,
+    field: &GridField,
+    take_velocity: bool,
+) {
+    location
+        .footprint
+        .par_iter()
+        .zip(points.position.par_iter())
+        .zip(points.velocity.par_iter_mut())
+        .zip(points.advection.par_iter_mut())
+        .zip(
+            points
+                .velocity_gradient
+                .par_iter_mut()
+                .zip(points.affine.par_iter_mut()),
+        )
+        .for_each(|((((f, &x), v), adv), (l, c))| {
+            let (v_grid, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
+            if take_velocity {
                 *v = v_grid;
                 *adv = v_grid;
-                *l = grad;
-                *c = affine;
-            });
-    }
+            }
+            *l = grad;
+            *c = affine;
+        });
 }
 
 /// MUSL pass 1 with APIC: the point takes the grid velocity. Its affine field is taken in
@@ -238,17 +293,12 @@ pub fn musl_remap(
         field.momentum.fill(DVec2::ZERO);
         let apic = !points.affine.is_empty();
         for (k, f) in location.footprint.iter().enumerate() {
-            let m = points.mass[k];
-            let mv = m * points.velocity[k];
-            if apic {
-                let mc = m * points.affine[k];
-                let (dx, dy) = f.offsets(&grid, points.position[k]);
-                f.for_each_indexed(|kx, ky, n, w, _| {
-                    field.momentum[n] += w * (mv + mc * DVec2::new(dx[kx], dy[ky]));
-                });
+            let momentum_at = if apic {
+                NodeMomentum::of::<true>(points, k, f, &grid)
             } else {
-                f.for_each_entry(|n, w, _| field.momentum[n] += w * mv);
-            }
+                NodeMomentum::of::<false>(points, k, f, &grid)
+            };
+            f.for_each_indexed(|kx, ky, n, w, _| field.momentum[n] += w * momentum_at.at(kx, ky));
         }
         for n in 0..field.mass.len() {
             let m = field.mass[n];
@@ -278,24 +328,8 @@ pub fn musl_apic_gradient<S: Scheme>(
     grid: Res<GridGeometry>,
     mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
-    let grid = &*grid;
     for (mut points, location, field) in &mut bodies {
-        let points = &mut *points;
-        location
-            .footprint
-            .par_iter()
-            .zip(points.position.par_iter())
-            .zip(
-                points
-                    .velocity_gradient
-                    .par_iter_mut()
-                    .zip(points.affine.par_iter_mut()),
-            )
-            .for_each(|((f, &x), (l, c))| {
-                let (_, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
-                *l = grad;
-                *c = affine;
-            });
+        gather_affine::<S>(&grid, &mut points, location, field, false);
     }
 }
 

@@ -15,18 +15,25 @@
 //! fraction below the surface cells, whether its summed point volume still equals the area
 //! it occupies, and the velocity profile against the analytic one.
 
+use std::path::Path;
+
 use glam::DVec2;
 
 use crate::body::{Phase, PointStates, Points};
 use crate::material::granular::TransPhase;
+use crate::plugin::Regolith;
+use crate::scene::Scene;
+use crate::sim::Simulation;
 use crate::stress::Stress;
+
+/// Depth of the layer in `scenes/chute_flow.ron` (m); `run` checks it against the scene.
+pub const DEPTH: f64 = 0.1;
 
 /// The mu(I) steady state of a layer of depth `depth` at angle `angle` (radians).
 #[derive(Clone, Debug)]
 pub struct Bagnold {
     pub angle: f64,
     pub depth: f64,
-    pub gravity: f64,
     /// The constant inertial number of the steady layer.
     pub inertial_number: f64,
     /// `(I / d) sqrt(phi g cos th)`, so that `u = k (2/3) (H^1.5 - (H - y)^1.5)`.
@@ -46,7 +53,6 @@ impl Bagnold {
         Some(Bagnold {
             angle,
             depth,
-            gravity,
             inertial_number: i,
             rate,
         })
@@ -196,6 +202,84 @@ pub fn measure(
         speed_95: speeds[(0.95 * (n - 1) as f64) as usize],
         profile_error,
     }
+}
+
+/// Runs the chute scene at `path` (`scenes/chute_flow.ron`) at `angle_deg` degrees with
+/// `cells_per_depth` cells across the layer (even: the domain is half as wide as the
+/// layer is deep), to `end` seconds, with further `--set` overrides `sets`. The layer starts
+/// in its lithostatic state moving with `profile` (`start_steady`), and is measured against
+/// it at t = 0, every `every` seconds and at the end (`each(t, state)`, once each). Returns
+/// the steps taken; a scene error or a fault of the run is the error.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    path: &Path,
+    angle_deg: f64,
+    cells_per_depth: usize,
+    end: f64,
+    sets: &[String],
+    profile: Option<&Bagnold>,
+    every: f64,
+    mut each: impl FnMut(f64, &ChuteState),
+) -> Result<u64, String> {
+    if !cells_per_depth.is_multiple_of(2) {
+        return Err(format!(
+            "cells per depth must be even (the domain is half as wide), got {cells_per_depth}"
+        ));
+    }
+    let th = angle_deg.to_radians();
+    let gravity = DVec2::new(9.81 * th.sin(), -9.81 * th.cos());
+    let across = cells_per_depth / 2;
+    let mut all = vec![
+        format!("gravity=({}, {})", gravity.x, gravity.y),
+        format!("domain.cells=({across}, {})", 3 * across),
+        format!("time.end={end}"),
+    ];
+    all.extend(sets.iter().cloned());
+    let scene = Scene::load(path, &all, &Regolith::default().registries())
+        .map_err(|e| e.to_string())?
+        .0;
+    let mut sim = Simulation::new(&scene);
+    let (width, cell) = (scene.domain.size.x, sim.grid().cell_size);
+    let body = scene
+        .bodies
+        .first()
+        .map(|b| b.name.clone())
+        .unwrap_or_default();
+    let material = ps1();
+    let mut points = sim
+        .points_mut(&body)
+        .ok_or_else(|| format!("{}: no body to run", path.display()))?;
+    start_steady(&mut points, &material, gravity, DEPTH, profile);
+    let state = |sim: &mut Simulation| {
+        let mut q = sim.world.query::<(&Points, &PointStates)>();
+        let (p, s) = q.single(&sim.world).expect("the chute scene has one body");
+        measure(p, s, width, cell, profile)
+    };
+    let first = state(&mut sim);
+    if (first.top - DEPTH).abs() > 0.5 * cell {
+        return Err(format!(
+            "{}: the layer's top is at {:.4} m, not at the {DEPTH} m the chute measures assume",
+            path.display(),
+            first.top
+        ));
+    }
+    each(0.0, &first);
+    let mut next = every;
+    let mut sampled = true;
+    while !sim.finished() {
+        sim.step()
+            .map_err(|e| format!("{angle_deg} degrees, {cells_per_depth} cells per depth: {e}"))?;
+        let t = sim.clock().time;
+        sampled = t >= next - 1e-9;
+        if sampled {
+            next += every;
+            each(t, &state(&mut sim));
+        }
+    }
+    if !sampled {
+        each(sim.clock().time, &state(&mut sim));
+    }
+    Ok(sim.clock().step)
 }
 
 #[cfg(test)]
