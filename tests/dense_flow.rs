@@ -8,10 +8,10 @@
 //! docs/VALIDATION.md, `cargo run --release --example dense_flow`).
 //!
 //! They run with `transfer: Apic`, which holds these flows; FLIP, still the default, fails
-//! the steady-flow test within 1 s. APIC is not the default yet because it moves the far
-//! surface of the coarse flow-field bed and leaves more of a thrown block disconnected
-//! (docs/VALIDATION.md, "Steady chute flow"); until it is, these tests say which transfer
-//! holds a dense flow, and the issue stays open.
+//! the steady-flow test within 1 s. APIC is not the default yet (docs/numerics.md, "Dense
+//! flow": a thrown block re-densifies less, and the impacted bed's bulking, present under
+//! both transfers, crosses an output test's threshold with APIC); until it is, these tests
+//! say which transfer holds a dense flow, and the issue stays open.
 
 use regolith::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration, ps1, run};
 
