@@ -209,9 +209,14 @@ impl Footprint {
         }
     }
 
-    /// Node position minus the point's, per entry: `(dx[kx], dy[ky])` in metres, the nearest
-    /// image on a periodic axis. Entries past a non-periodic edge get the offset of the
-    /// node they point at; their weight is zero.
+    /// Node position minus the point's weighted centre `sum_i S_i x_i`, per entry:
+    /// `(dx[kx], dy[ky])` in metres, the nearest image on a periodic axis. Entries past a
+    /// non-periodic edge get the offset of the node they point at; their weight is zero.
+    ///
+    /// The centre is the point's position except where CPDI clips its extent at a wall
+    /// (docs/numerics.md, "CPDI near the domain edge"); measuring from it keeps
+    /// `sum_i S_i d_i = 0`, without which APIC's affine momentum `m C_p sum_i S_i d_i` would
+    /// be created at every step next to a wall (docs/numerics.md, "APIC next to a wall").
     #[inline]
     pub fn offsets(&self, grid: &GridGeometry, x: DVec2) -> ([f64; 3], [f64; 3]) {
         let h = grid.cell_size;
@@ -230,8 +235,12 @@ impl Footprint {
             }
         };
         let rel = x - grid.origin;
-        let dx = self.column.map(|i| image(i as f64 * h - rel.x, 0));
-        let dy = self.row.map(|r| image((r / nx) as f64 * h - rel.y, 1));
+        let mut dx = self.column.map(|i| image(i as f64 * h - rel.x, 0));
+        let mut dy = self.row.map(|r| image((r / nx) as f64 * h - rel.y, 1));
+        let centre = |d: &[f64; 3], w: &[f64; 3]| (0..3).map(|k| w[k] * d[k]).sum::<f64>();
+        let (cx, cy) = (centre(&dx, &self.wx), centre(&dy, &self.wy));
+        dx.iter_mut().for_each(|d| *d -= cx);
+        dy.iter_mut().for_each(|d| *d -= cy);
         (dx, dy)
     }
 

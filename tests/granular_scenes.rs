@@ -103,9 +103,14 @@ fn columns_collapse_to_rest() {
 
 /// A granular block thrown upward with a stretching velocity `v_y = 2 y / H` dilates below
 /// the critical density at once (over 90% of its points disconnected, stress free), flies,
-/// lands and re-densifies: 0.6 s later at least 70% of its points are dense again. (The rest
-/// are the pile's surface and still-flowing flanks, at pressures within round-off of zero;
-/// with `dilatation: PerPoint`, where sub-cell pores cannot close, 72% stay disconnected.)
+/// lands and re-densifies at the default numerics: 0.6 s later it is at rest, most of its
+/// points are dense again, and its summed point volume is back within 10% of its dense
+/// volume `m / rho_c`. The points still disconnected at the end are the pile's surface and
+/// pockets left where the landing piled loose grains on grains already dense: the pocket's
+/// nodes are held by its dense neighbours, so it cannot settle inside a cell. Measured
+/// (docs/numerics.md, "Loose pockets"): with 10 mm cells 31.5% disconnected and the volume
+/// 4.5% over at the end; with 5 mm cells 12.9% and 0.95%. With FLIP (the old default) the
+/// pile still moves at 0.41 m/s rms at 0.6 s.
 #[test]
 fn thrown_grains_disconnect_and_re_densify_on_landing() {
     let scene = regolith::plugin::parse_scene(
@@ -114,7 +119,6 @@ fn thrown_grains_disconnect_and_re_densify_on_landing() {
         domain: (size: (0.3, 0.5), cells: (30, 50)),
         time: (end: 0.6, step: Cfl(0.5), output_every: 0.01),
         walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),
-        flip: 0.95,
         bodies: [(
             name: "grains",
             shape: Rectangle(min: (0.05, 0.0), max: (0.25, 0.1)),
@@ -154,12 +158,72 @@ fn thrown_grains_disconnect_and_re_densify_on_landing() {
     );
     let at_end = disconnected_fraction(&mut sim);
     assert!(
-        at_end < 0.3,
+        at_end < 0.5,
         "{at_end} of the points are still disconnected after landing"
+    );
+    let p = sim.points("grains").unwrap();
+    let dense: f64 = p.mass.iter().sum::<f64>() / (0.79 * 1280.0);
+    let volume: f64 = p.volume.iter().sum();
+    assert!(
+        (volume / dense - 1.0).abs() < 0.1,
+        "summed volume {volume} m^2 against the dense volume {dense} m^2"
     );
     assert!(
         rms_speed(&mut sim) < 0.05,
         "still moving at {} m/s",
         rms_speed(&mut sim)
     );
+}
+
+/// A PS-1 layer (0.1 m, lithostatic, periodic sides) falling at 1 m/s onto the rigid floor
+/// bounces off it like an elastic rod: the dense phase stores the compression elastically
+/// (uniaxial strain keeps `tau / p = 0.12`, below `mu_s`, so nothing yields) and nothing in
+/// the model dissipates it. The floor's push is the constant `rho_c c v` of the compression
+/// front for one round trip `2 H / c` of the p-wave, so the layer's mean velocity rises
+/// linearly, through zero at `H / c` (0.37 ms), and the layer leaves with its impact speed.
+/// This is why a bed hit by an intruder bulks: the floor hands the impact's momentum back as
+/// an upward wave that lifts the surface (docs/numerics.md, "The impact bulks the bed").
+/// Measured: zero crossing at 0.374 ms (`H / c` = 0.365 ms), 0.91 m/s upward at 2 ms.
+#[test]
+fn a_dropped_layer_bounces_off_the_floor_like_an_elastic_rod() {
+    let scene = regolith::plugin::parse_scene(
+        r#"(
+        name: "drop",
+        domain: (size: (0.1, 0.3), cells: (10, 30)),
+        time: (end: 0.002, step: Cfl(0.5), output_every: 0.001),
+        walls: (left: Periodic, right: Periodic, bottom: NoSlip, top: Free),
+        bodies: [(
+            name: "layer",
+            shape: Rectangle(min: (0.0, 0.0), max: (0.1, 0.1)),
+            material: MuI(
+                youngs_modulus: 2.0e7, poisson_ratio: 0.45,
+                grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3,
+                mu_s: 0.320, mu_2: 0.598, i_0: 0.278,
+            ),
+            velocity: (0.0, -1.0),
+            initial_stress: Lithostatic,
+        )],
+    )"#,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&scene);
+    let wave_speed = sim.bodies()[0].0.wave_speed;
+    let transit = 0.1 / wave_speed;
+    let mut crossing = None;
+    let mut before = (0.0, -1.0);
+    while !sim.finished() {
+        sim.step().unwrap();
+        let (t, v) = (sim.clock().time, sim.bodies()[0].1.velocity.y);
+        if crossing.is_none() && v >= 0.0 {
+            crossing = Some(before.0 + (t - before.0) * -before.1 / (v - before.1));
+        }
+        before = (t, v);
+    }
+    let crossing = crossing.expect("the layer never turned");
+    assert!(
+        (crossing / transit - 1.0).abs() < 0.1,
+        "mean velocity crossed zero at {crossing:.3e} s, H / c = {transit:.3e} s"
+    );
+    let v = sim.bodies()[0].1.velocity.y;
+    assert!(v > 0.85, "the layer left the floor at {v} m/s");
 }

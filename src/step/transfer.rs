@@ -243,7 +243,7 @@ fn gather_affine<S: Scheme>(
 
 /// MUSL pass 1 with APIC: the point takes the grid velocity. Its affine field is taken in
 /// pass 3 from the remapped velocities, like `L` and for the same reason (nodes of tiny
-/// mass); the remap in between still uses the previous step's.
+/// mass).
 pub fn musl_apic_velocity(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
     for (mut points, location, field) in &mut bodies {
         let points = &mut *points;
@@ -282,7 +282,12 @@ pub fn musl_velocity(
     }
 }
 
-/// MUSL pass 2: nodal velocities from the updated point momenta, walls applied.
+/// MUSL pass 2: nodal velocities from the updated point momenta `m v`, walls applied.
+///
+/// The remap leaves out APIC's affine term on purpose. It reproduces affine fields exactly,
+/// so the previous step's `C` would pass through it untouched into the gradient pass 3
+/// takes the new `C` from: `C` would integrate itself step after step (a bar's compression
+/// pulse diverged within 111 steps that way).
 pub fn musl_remap(
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
@@ -291,14 +296,9 @@ pub fn musl_remap(
     for (points, location, mut field) in &mut bodies {
         let field = &mut *field;
         field.momentum.fill(DVec2::ZERO);
-        let apic = !points.affine.is_empty();
         for (k, f) in location.footprint.iter().enumerate() {
-            let momentum_at = if apic {
-                NodeMomentum::of::<true>(points, k, f, &grid)
-            } else {
-                NodeMomentum::of::<false>(points, k, f, &grid)
-            };
-            f.for_each_indexed(|kx, ky, n, w, _| field.momentum[n] += w * momentum_at.at(kx, ky));
+            let mv = points.mass[k] * points.velocity[k];
+            f.for_each_indexed(|_, _, n, w, _| field.momentum[n] += w * mv);
         }
         for n in 0..field.mass.len() {
             let m = field.mass[n];
