@@ -190,7 +190,7 @@ impl Scene {
             return err(
                 "flip",
                 format!(
-                    "flip = {} blends FLIP with PIC, but this scene's transfer is Apic (the default), which has no blend; set `transfer: Flip` to use the blend",
+                    "flip = {} blends FLIP with PIC, but this scene's transfer is Apic, which has no blend",
                     self.flip
                 ),
             );
