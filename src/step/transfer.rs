@@ -241,31 +241,25 @@ fn gather_affine<S: Scheme>(
         });
 }
 
-/// MUSL pass 1 with APIC: the point takes the grid velocity. Its affine field is taken in
-/// pass 3 from the remapped velocities, like `L` and for the same reason (nodes of tiny
-/// mass).
-pub fn musl_apic_velocity(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
-    for (mut points, location, field) in &mut bodies {
-        let points = &mut *points;
-        location
-            .footprint
-            .par_iter()
-            .zip(points.velocity.par_iter_mut())
-            .zip(points.advection.par_iter_mut())
-            .for_each(|((f, v), adv)| {
-                *v = f.interpolate(&field.velocity);
-                *adv = *v;
-            });
-    }
+/// MUSL pass 1 with APIC: the point takes the grid velocity (the PIC update). Its affine
+/// field is taken in pass 3 from the remapped velocities, like `L` and for the same reason
+/// (nodes of tiny mass).
+pub fn musl_apic_velocity(clock: Res<Clock>, bodies: Query<(&mut Points, &Location, &GridField)>) {
+    update_velocities(clock.dt, 0.0, bodies);
 }
 
 /// MUSL pass 1: the FLIP velocity update; the advection velocity is kept for pass 3.
 pub fn musl_velocity(
     clock: Res<Clock>,
     flip: Res<FlipRatio>,
-    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+    bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
-    let (dt, flip) = (clock.dt, flip.0);
+    update_velocities(clock.dt, flip.0, bodies);
+}
+
+/// Every point's velocity from the grid, FLIP blended with PIC by `flip` (0 is PIC), and
+/// its advection velocity.
+fn update_velocities(dt: f64, flip: f64, mut bodies: Query<(&mut Points, &Location, &GridField)>) {
     for (mut points, location, field) in &mut bodies {
         let points = &mut *points;
         location
