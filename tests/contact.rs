@@ -203,7 +203,7 @@ fn colliding_discs_separate_without_sticking() {
 /// the last 0.2 s the contact force the bed exerts on it carries its weight on average (the
 /// instantaneous force rings with the elastic bodies), and at every step it is equal and
 /// opposite on the bed. Linear elasticity dissipates nothing, so the test damps the ringing
-/// with a FLIP/PIC blend (its choice, stated here; the default APIC transfer keeps it).
+/// with a FLIP/PIC blend (its choice, stated here; pure FLIP or APIC keeps it ringing).
 #[test]
 fn intruder_settles_on_an_elastic_bed() {
     let scene = parse_scene(
