@@ -13,6 +13,7 @@
 //! ```
 
 use regolith::body::{Phase, PointStates, Points};
+use regolith::verify::quantile;
 use regolith::{Regolith, Scene, Simulation};
 
 const WIDTH: f64 = 0.1;
@@ -28,9 +29,7 @@ fn lube(a: f64) -> f64 {
 
 /// The 95th percentile of the point speeds.
 fn speed_95(p: &Points) -> f64 {
-    let mut s: Vec<f64> = p.velocity.iter().map(|v| v.length()).collect();
-    s.sort_by(f64::total_cmp);
-    s[(0.95 * (s.len() - 1) as f64) as usize]
+    quantile(p.velocity.iter().map(|v| v.length()).collect(), 0.95)
 }
 
 fn main() {

@@ -156,10 +156,8 @@ pub fn measure(
     if n == 0 {
         return ChuteState::default();
     }
-    let mut heights: Vec<f64> = points.position.iter().map(|x| x.y).collect();
-    heights.sort_by(f64::total_cmp);
     let spacing = 2.0 * points.half_width[0];
-    let top = heights[(0.99 * (n - 1) as f64) as usize] + 0.5 * spacing;
+    let top = super::quantile(points.position.iter().map(|x| x.y).collect(), 0.99) + 0.5 * spacing;
     let volume: f64 = points.volume.iter().sum();
     let gas = |k: usize| states.phase[k] == Phase::Disconnected;
     let bulk: Vec<usize> = (0..n)
@@ -172,8 +170,6 @@ pub fn measure(
         .map(|k| points.mass[k] * points.velocity[k].x)
         .sum::<f64>()
         / mass;
-    let mut speeds: Vec<f64> = points.velocity.iter().map(|v| v.length()).collect();
-    speeds.sort_by(f64::total_cmp);
     let profile_error = profile.map(|b| {
         let rows = (b.depth / cell).round() as usize;
         let mut sums = vec![(0.0, 0usize); rows];
@@ -199,7 +195,7 @@ pub fn measure(
         disconnected_bulk,
         disconnected: (0..n).filter(|&k| gas(k)).count() as f64 / n as f64,
         mean_speed,
-        speed_95: speeds[(0.95 * (n - 1) as f64) as usize],
+        speed_95: super::quantile(points.velocity.iter().map(|v| v.length()).collect(), 0.95),
         profile_error,
     }
 }

@@ -13,6 +13,16 @@ use crate::linefit::line_fit;
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
+/// The `q` quantile of `values` (0 <= q <= 1): the sorted value at index `floor(q (n - 1))`,
+/// no interpolation; NaN for no values.
+pub fn quantile(mut values: Vec<f64>, q: f64) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    values[(q * (values.len() - 1) as f64) as usize]
+}
+
 /// Times where `v` changes sign, linearly interpolated between samples.
 pub fn zero_crossings(t: &[f64], v: &[f64]) -> Vec<f64> {
     let mut out = Vec::new();
