@@ -238,9 +238,10 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
     } else {
         0
     };
-    let affine = match scene.transfer {
-        crate::scene::Transfer::Apic => crate::body::Points::AFFINE_BYTES,
-        crate::scene::Transfer::Flip => 0,
+    let affine = if scene.transfer.affine() {
+        crate::body::Points::AFFINE_BYTES
+    } else {
+        0
     };
     let counts: Vec<usize> = sim.bodies().iter().map(|b| b.2).collect();
     scene

@@ -50,9 +50,19 @@ pub struct Gravity(pub DVec2);
 #[derive(Resource, Clone, Copy, Debug)]
 pub struct Boundaries(pub Walls);
 
-/// FLIP fraction of the point velocity update.
+/// How the points' velocities follow the grid: the scene's transfer and its FLIP fraction.
 #[derive(Resource, Clone, Copy, Debug)]
-pub struct FlipRatio(pub f64);
+pub struct VelocityRule {
+    pub transfer: Transfer,
+    pub flip: f64,
+}
+
+impl VelocityRule {
+    /// [`Transfer::pull`] for a step `dt` of a body of p-wave speed `c` on cells of size `h`.
+    pub fn pull(&self, dt: f64, h: f64, c: f64) -> f64 {
+        self.transfer.pull(self.flip, dt, h, c)
+    }
+}
 
 /// A ready-to-step simulation.
 pub struct Simulation {
@@ -162,9 +172,10 @@ impl Simulation {
                 stress,
                 velocity_gradient: vec![DMat2::ZERO; n],
                 advection: vec![spec.velocity; n],
-                affine: match scene.transfer {
-                    Transfer::Apic => vec![DMat2::ZERO; n],
-                    Transfer::Flip => Vec::new(),
+                affine: if scene.transfer.affine() {
+                    vec![DMat2::ZERO; n]
+                } else {
+                    Vec::new()
                 },
                 density: point_density,
             };
@@ -240,7 +251,10 @@ impl Simulation {
         });
         world.insert_resource(Gravity(scene.gravity));
         world.insert_resource(Boundaries(scene.walls));
-        world.insert_resource(FlipRatio(scene.flip));
+        world.insert_resource(VelocityRule {
+            transfer: scene.transfer,
+            flip: scene.flip,
+        });
         world.insert_resource(Health::default());
         world.insert_resource(OutputFaults::default());
         world.insert_resource(Timings::default());

@@ -92,6 +92,18 @@ fn bad_scenes_give_their_messages() {
         ),
         (
             6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free), transfer: AffineFlip(relaxation: 0.0),",
+            "relaxation must be a positive number of p-wave crossings",
+            Some(6),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free), transfer: AffineFlip(relaxation: 10.0), flip: 0.9,",
+            "only `transfer: Flip` has",
+            Some(6),
+        ),
+        (
+            6,
             "    walls: (left: Sticky, right: Slip, bottom: NoSlip, top: Free),",
             "Sticky",
             Some(6),

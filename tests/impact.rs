@@ -51,6 +51,28 @@ fn the_apic_impact_settles() {
     assert!(depth > 0.0 && v < 0.05, "depth {depth} m, still at {v} m/s");
 }
 
+/// The affine FLIP transfer relaxes the points' sub-grid velocity over a fixed time, so the
+/// impact's depth does not depend on the step (tests/relaxation.rs has the transfer alone).
+/// On 25 cells: 0.2750 m at CFL 0.5, 0.2743 m at CFL 0.1 to 0.4 s; APIC's per-step projection
+/// gives 0.159 and 0.094 m on the same runs.
+#[test]
+fn the_affine_flip_impact_converges_in_the_step() {
+    let depth = |cfl: f64| {
+        let step = format!("time.step=Cfl({cfl})");
+        let sets = [
+            "domain.cells=(25, 25)",
+            "transfer=AffineFlip(relaxation: 27)",
+            &step,
+        ];
+        impact_with(&sets).0
+    };
+    let (coarse, fine) = (depth(0.5), depth(0.1));
+    assert!(
+        coarse > 0.0 && (coarse - fine).abs() < 0.02 * fine,
+        "depth {coarse:.4} m at CFL 0.5, {fine:.4} m at CFL 0.1"
+    );
+}
+
 /// A faster impact goes deeper, and both intruders come to rest within 0.3 s (the paper's
 /// runs are "essentially completed by 0.3 s"): final speed below 5 cm/s, against impact
 /// speeds of 2 and 4.5 m/s.

@@ -186,12 +186,22 @@ impl Scene {
                 format!("flip must lie in [0, 1] (1 = pure FLIP), got {}", self.flip),
             );
         }
-        if self.transfer == Transfer::Apic && self.flip != 1.0 {
+        if self.transfer != Transfer::Flip && self.flip != 1.0 {
             return err(
                 "flip",
                 format!(
-                    "flip = {} blends FLIP with PIC, but this scene's transfer is Apic, which has no blend",
-                    self.flip
+                    "flip = {} blends FLIP with PIC at every step, which only `transfer: Flip` has; this scene's transfer is {:?}",
+                    self.flip, self.transfer
+                ),
+            );
+        }
+        if let Transfer::AffineFlip { relaxation } = self.transfer
+            && !(relaxation.is_finite() && relaxation > 0.0)
+        {
+            return err(
+                "transfer",
+                format!(
+                    "relaxation must be a positive number of p-wave crossings of a cell, got {relaxation}"
                 ),
             );
         }

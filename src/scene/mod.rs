@@ -53,11 +53,12 @@ pub struct Scene {
     /// `Frictional(friction: mu)`.
     #[serde(default)]
     pub contact: Contact,
-    /// How velocities go from the grid back to the points: `Flip` (the paper's, the default)
-    /// or `Apic` (affine particle-in-cell); docs/numerics.md.
+    /// How velocities go from the grid back to the points: `Flip` (the paper's, the default),
+    /// `Apic` (affine particle-in-cell) or `AffineFlip(relaxation: n)`; docs/numerics.md.
     #[serde(default)]
     pub transfer: Transfer,
-    /// FLIP fraction of the point velocity update: 1 is pure FLIP (the paper), 0 pure PIC.
+    /// FLIP fraction of the point velocity update with `transfer: Flip`: 1 is pure FLIP (the
+    /// paper), 0 pure PIC.
     #[serde(default = "default_flip")]
     pub flip: f64,
     pub bodies: Vec<BodySpec>,
@@ -94,22 +95,48 @@ pub enum StressUpdate {
     Musl,
 }
 
-/// The grid-to-point velocity transfer (docs/numerics.md).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+/// The grid-to-point velocity transfer (docs/numerics.md, "Dense flow").
+///
+/// Every transfer updates a point's velocity the same way: its FLIP update `v + dt a_grid`
+/// is pulled part of the way to the grid's velocity at the point ([`Transfer::pull`]). They
+/// differ in how far, and in whether the point hands the grid an affine field too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 pub enum Transfer {
-    /// FLIP (the paper's transfer, the default): each point keeps its velocity and adds the
-    /// grid's acceleration, optionally blended with PIC by `flip`. Converges in the time
-    /// step on the impact, but its sub-grid velocity noise loses a dense chute flow within a
-    /// second (docs/numerics.md, "Dense flow").
+    /// FLIP (the paper's transfer): each point keeps its velocity and adds the grid's
+    /// acceleration, optionally blended with PIC by `flip` at every step, a damping whose
+    /// size is set by the step.
     #[default]
     Flip,
     /// APIC (Jiang et al. 2015): each point takes the grid velocity at its position and the
     /// affine field `C_p` around it, which it hands back to the grid in the next scatter.
-    /// Conserves linear and angular momentum and reproduces affine fields, and holds a
-    /// chute flow; but the projection is made at every step, so what it dissipates grows
-    /// as the step shrinks (the impact's depth falls from 0.31 to 0.18 m between CFL 1 and
-    /// 0.05; docs/numerics.md, "Why APIC is not the default").
+    /// Conserves linear and angular momentum and reproduces affine fields; but the
+    /// projection is made at every step, so what it dissipates grows as the step shrinks
+    /// (the impact's depth falls from 0.31 to 0.18 m between CFL 1 and 0.05).
     Apic,
+    /// APIC's affine scatter with FLIP's velocity update, whose departure from the grid's
+    /// velocity relaxes over `relaxation` p-wave crossings of a cell, `tau = relaxation h /
+    /// c` (the unit of the CFL number, so a step removes the fraction `1 - exp(-CFL /
+    /// relaxation)`). The damping is fixed in time, so the answer converges in the step,
+    /// and `tau` shrinks with the cell.
+    AffineFlip { relaxation: f64 },
+}
+
+impl Transfer {
+    /// Whether points carry an affine field `C_p` and hand it to the grid.
+    pub fn affine(&self) -> bool {
+        !matches!(self, Transfer::Flip)
+    }
+
+    /// The fraction of the way from its FLIP update to the grid's velocity that a point's
+    /// velocity moves in a step `dt`, for a body of p-wave speed `c` on cells of size `h`:
+    /// `1 - flip` with FLIP, 1 with APIC, `1 - exp(-dt c / (relaxation h))` with affine FLIP.
+    pub fn pull(&self, flip: f64, dt: f64, h: f64, c: f64) -> f64 {
+        match *self {
+            Transfer::Flip => 1.0 - flip,
+            Transfer::Apic => 1.0,
+            Transfer::AffineFlip { relaxation } => -(-dt * c / (relaxation * h)).exp_m1(),
+        }
+    }
 }
 
 /// How the volumetric part of the velocity gradient is taken (docs/numerics.md).

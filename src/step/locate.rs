@@ -6,7 +6,7 @@
 //! MUSL's remap. Building it in each transfer was a third of the step (docs/BENCHMARKS.md).
 //! Each point's cell (for the band bucketing of the lock-free scatter and for the cell
 //! averages) is found here too, and found again once the points have moved when the cell
-//! averages need it (`transfer::cell_density`); the next step's `locate_points` then reuses
+//! averages need it (`cell_average::cell_density`); the next step's `locate_points` then reuses
 //! those cells and bands instead of finding them again (the points do not move in between).
 
 use bevy_ecs::prelude::*;

@@ -10,6 +10,7 @@
 //! the clock is only observing (the t = 0 output before the first step).
 
 mod bands;
+pub mod cell_average;
 mod grid_update;
 mod locate;
 mod prepare;
@@ -25,10 +26,10 @@ use crate::scene::{Dilatation, StressUpdate, Transfer};
 use crate::sim::Clock;
 
 pub use bands::Bands;
+pub use cell_average::CellDilatation;
 pub use grid_update::{apply_walls, update_grid};
 pub use locate::{Location, locate_points};
 pub use prepare::signal_speed;
-pub use transfer::CellDilatation;
 
 /// The stages of a step, run in this order.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -175,9 +176,9 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
         Dilatation::CellAveraged => {
             schedule.add_systems(
                 (
-                    transfer::average_dilatation,
+                    cell_average::average_dilatation,
                     transfer::advect_points,
-                    transfer::cell_density,
+                    cell_average::cell_density,
                 )
                     .chain()
                     .in_set(gradient_done)
@@ -212,37 +213,33 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: StepOptions) {
     schedule.add_systems(
         (
             locate_points::<S>,
-            transfer::average_stress_trace,
+            cell_average::average_stress_trace,
             transfer::particle_to_grid,
         )
             .chain()
             .in_set(StepSet::ParticleToGrid),
     );
     let gather = (StepSet::GridToParticle, GradientSystems);
-    match (options.update, options.transfer) {
-        (StressUpdate::Usl, Transfer::Flip) => {
+    let affine = options.transfer.affine();
+    match (options.update, affine) {
+        (StressUpdate::Usl, false) => {
             schedule.add_systems(transfer::grid_to_particle.in_set(gather.0).in_set(gather.1));
         }
-        (StressUpdate::Usl, Transfer::Apic) => {
+        (StressUpdate::Usl, true) => {
             schedule.add_systems(
-                transfer::apic_to_particle::<S>
+                transfer::affine_to_particle::<S>
                     .in_set(gather.0)
                     .in_set(gather.1),
             );
         }
-        (StressUpdate::Musl, transfer) => {
-            let (velocity, gradient) = match transfer {
-                Transfer::Flip => (
-                    transfer::musl_velocity.into_configs(),
-                    transfer::musl_gradient.into_configs(),
-                ),
-                Transfer::Apic => (
-                    transfer::musl_apic_velocity.into_configs(),
-                    transfer::musl_apic_gradient::<S>.into_configs(),
-                ),
+        (StressUpdate::Musl, _) => {
+            let gradient = if affine {
+                transfer::musl_apic_gradient::<S>.into_configs()
+            } else {
+                transfer::musl_gradient.into_configs()
             };
             schedule.add_systems(
-                (velocity, transfer::musl_remap, gradient)
+                (transfer::musl_velocity, transfer::musl_remap, gradient)
                     .chain()
                     .in_set(gather.0)
                     .in_set(gather.1),

@@ -16,13 +16,14 @@ use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 
 use super::bands::{Bands, Shared};
+use super::cell_average::CellDilatation;
 use super::grid_update::apply_walls;
 use super::locate::Location;
-use crate::body::Points;
+use crate::body::{Body, Points};
 use crate::grid::{GridField, GridGeometry};
 use crate::integration::{Footprint, Scheme};
 use crate::scene::Wall;
-use crate::sim::{Boundaries, Clock, FlipRatio, Gravity};
+use crate::sim::{Boundaries, Clock, Gravity, VelocityRule};
 
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the
 /// field keeps normals, `g_i = sum m grad S`, from the footprints of `locate_points`.
@@ -85,7 +86,7 @@ fn scatter_body<const APIC: bool>(
             let vol = points.volume[p];
             let mut t = points.stress[p];
             if let Some(cells) = cells {
-                let shift = 0.5 * (cells.trace_mean[location.cell[p] as usize] - t.xx - t.yy);
+                let shift = 0.5 * (cells.stress_trace(location.cell[p]) - t.xx - t.yy);
                 t.xx += shift;
                 t.yy += shift;
             }
@@ -145,21 +146,29 @@ impl NodeMomentum {
     }
 }
 
-/// FLIP velocity update blended with PIC by `flip`.
+/// A point's new velocity: its FLIP update `v + dt a_grid` pulled the fraction `pull` of the
+/// way to the grid's velocity `v_grid` at the point ([`crate::scene::Transfer::pull`]): 0 is
+/// FLIP, 1 takes the grid's velocity (PIC, or APIC with the affine field).
 #[inline]
-fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, flip: f64) -> DVec2 {
-    flip * (v + dt * a_grid) + (1.0 - flip) * v_grid
+fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, pull: f64) -> DVec2 {
+    if pull == 1.0 {
+        return v_grid;
+    }
+    let flip = v + dt * a_grid;
+    flip + pull * (v_grid - flip)
 }
 
-/// USL: FLIP velocity update, advection velocity and velocity gradient
-/// `L = sum v_i (outer) grad S`, in one pass.
+/// USL without an affine field: the FLIP/PIC velocity update, advection velocity and
+/// velocity gradient `L = sum v_i (outer) grad S`, in one pass.
 pub fn grid_to_particle(
     clock: Res<Clock>,
-    flip: Res<FlipRatio>,
-    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+    grid: Res<GridGeometry>,
+    rule: Res<VelocityRule>,
+    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
 ) {
-    let (dt, flip) = (clock.dt, flip.0);
-    for (mut points, location, field) in &mut bodies {
+    let dt = clock.dt;
+    for (body, mut points, location, field) in &mut bodies {
+        let pull = rule.pull(dt, grid.cell_size, body.wave_speed);
         let points = &mut *points;
         location
             .footprint
@@ -170,7 +179,7 @@ pub fn grid_to_particle(
             .for_each(|(((f, v), adv), l)| {
                 let (v_grid, grad) = f.interpolate_with_gradient(&field.velocity);
                 let a_grid = f.interpolate(&field.acceleration);
-                *v = new_velocity(*v, v_grid, a_grid, dt, flip);
+                *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
                 *l = grad;
             });
@@ -198,25 +207,30 @@ pub fn apic_gather<S: Scheme>(
     (v, l, b * f.affine_inertia(&dx, &dy).inverse())
 }
 
-/// USL with APIC: the point takes the grid velocity and its affine field, in one pass with
-/// the velocity gradient.
-pub fn apic_to_particle<S: Scheme>(
+/// USL with an affine field (APIC, affine FLIP): the point's velocity update, its affine
+/// field and the velocity gradient, in one pass.
+pub fn affine_to_particle<S: Scheme>(
+    clock: Res<Clock>,
     grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &Location, &GridField)>,
+    rule: Res<VelocityRule>,
+    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
 ) {
-    for (mut points, location, field) in &mut bodies {
-        gather_affine::<S>(&grid, &mut points, location, field, true);
+    for (body, mut points, location, field) in &mut bodies {
+        let pull = rule.pull(clock.dt, grid.cell_size, body.wave_speed);
+        let update = Some((clock.dt, pull));
+        gather_affine::<S>(&grid, &mut points, location, field, update);
     }
 }
 
 /// `L` and the affine field `C_p` of every point from `field`'s velocities, and with
-/// `take_velocity` the point's velocity (and advection velocity) too.
+/// `update = Some((dt, pull))` the point's velocity ([`new_velocity`]) and advection velocity
+/// too.
 fn gather_affine<S: Scheme>(
     grid: &GridGeometry,
     points: &mut Points,
     location: &Location,
     field: &GridField,
-    take_velocity: bool,
+    update: Option<(f64, f64)>,
 ) {
     location
         .footprint
@@ -232,8 +246,13 @@ fn gather_affine<S: Scheme>(
         )
         .for_each(|((((f, &x), v), adv), (l, c))| {
             let (v_grid, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
-            if take_velocity {
-                *v = v_grid;
+            if let Some((dt, pull)) = update {
+                let a_grid = if pull == 1.0 {
+                    DVec2::ZERO
+                } else {
+                    f.interpolate(&field.acceleration)
+                };
+                *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
             }
             *l = grad;
@@ -241,26 +260,18 @@ fn gather_affine<S: Scheme>(
         });
 }
 
-/// MUSL pass 1 with APIC: the point takes the grid velocity (the PIC update). Its affine
-/// field is taken in pass 3 from the remapped velocities, like `L` and for the same reason
-/// (nodes of tiny mass).
-pub fn musl_apic_velocity(clock: Res<Clock>, bodies: Query<(&mut Points, &Location, &GridField)>) {
-    update_velocities(clock.dt, 0.0, bodies);
-}
-
-/// MUSL pass 1: the FLIP velocity update; the advection velocity is kept for pass 3.
+/// MUSL pass 1: every point's velocity update ([`new_velocity`]) and its advection
+/// velocity. With an affine transfer the affine field is taken in pass 3 from the remapped
+/// velocities, like `L` and for the same reason (nodes of tiny mass).
 pub fn musl_velocity(
     clock: Res<Clock>,
-    flip: Res<FlipRatio>,
-    bodies: Query<(&mut Points, &Location, &GridField)>,
+    grid: Res<GridGeometry>,
+    rule: Res<VelocityRule>,
+    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
 ) {
-    update_velocities(clock.dt, flip.0, bodies);
-}
-
-/// Every point's velocity from the grid, FLIP blended with PIC by `flip` (0 is PIC), and
-/// its advection velocity.
-fn update_velocities(dt: f64, flip: f64, mut bodies: Query<(&mut Points, &Location, &GridField)>) {
-    for (mut points, location, field) in &mut bodies {
+    let dt = clock.dt;
+    for (body, mut points, location, field) in &mut bodies {
+        let pull = rule.pull(dt, grid.cell_size, body.wave_speed);
         let points = &mut *points;
         location
             .footprint
@@ -270,7 +281,7 @@ fn update_velocities(dt: f64, flip: f64, mut bodies: Query<(&mut Points, &Locati
             .for_each(|((f, v), adv)| {
                 let v_grid = f.interpolate(&field.velocity);
                 let a_grid = f.interpolate(&field.acceleration);
-                *v = new_velocity(*v, v_grid, a_grid, dt, flip);
+                *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
             });
     }
@@ -323,110 +334,7 @@ pub fn musl_apic_gradient<S: Scheme>(
     mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
     for (mut points, location, field) in &mut bodies {
-        gather_affine::<S>(&grid, &mut points, location, field, false);
-    }
-}
-
-/// Per-cell sums for the cell-averaged dilatation and density.
-#[derive(Component, Clone, Debug, Default)]
-pub struct CellDilatation {
-    volume: Vec<f64>,
-    weighted: Vec<f64>,
-    /// Volume-weighted mean of `T_xx + T_yy` per cell, for the scatter.
-    trace_mean: Vec<f64>,
-}
-
-impl CellDilatation {
-    pub fn new(cells: usize) -> Self {
-        CellDilatation {
-            volume: vec![0.0; cells],
-            weighted: vec![0.0; cells],
-            trace_mean: vec![0.0; cells],
-        }
-    }
-
-    /// Per-cell sums of the points' volumes and of `value(k)`, band by band in parallel (a
-    /// cell lies in exactly one band, so bands never share a sum; `bands` and `cell` must
-    /// be current).
-    fn sum(
-        &mut self,
-        points: &Points,
-        cell: &[u32],
-        bands: &Bands,
-        value: impl Fn(usize) -> f64 + Sync,
-    ) {
-        self.volume.fill(0.0);
-        self.weighted.fill(0.0);
-        let volume = Shared::new(&mut self.volume);
-        let weighted = Shared::new(&mut self.weighted);
-        bands.for_each(|b| {
-            let (volume, weighted) = (volume, weighted); // see `particle_to_grid`
-            for &k in bands.points(b) {
-                let k = k as usize;
-                let c = cell[k] as usize;
-                // SAFETY: cell indices are in bounds; band b alone owns the cells of its rows.
-                unsafe {
-                    volume.add_at(c, points.volume[k]);
-                    weighted.add_at(c, value(k));
-                }
-            }
-        });
-    }
-
-    /// `sum value / sum V` of cell `c`.
-    fn per_volume(&self, c: u32) -> f64 {
-        let c = c as usize;
-        self.weighted[c] / self.volume[c]
-    }
-}
-
-/// The cell means of the stress's in-plane trace `T_xx + T_yy` that the scatter uses in
-/// place of each point's own (the force conjugate to `average_dilatation`).
-pub fn average_stress_trace(mut bodies: Query<(&Points, &mut CellDilatation, &Bands, &Location)>) {
-    for (points, mut cells, bands, location) in &mut bodies {
-        let cells = &mut *cells;
-        cells.sum(points, &location.cell, bands, |k| {
-            let t = points.stress[k];
-            points.volume[k] * (t.xx + t.yy)
-        });
-        let CellDilatation {
-            volume,
-            weighted,
-            trace_mean,
-        } = cells;
-        trace_mean
-            .par_iter_mut()
-            .zip(volume.par_iter().zip(weighted.par_iter()))
-            .for_each(|(mean, (&v, &w))| *mean = if v > 0.0 { w / v } else { 0.0 });
-    }
-}
-
-/// Replaces each point's dilatation `tr L` by the volume-weighted mean over the points in
-/// its cell, keeping the deviatoric part: `L += (mean - tr L)/2 * 1`. With several points
-/// per cell and bilinear nodes, per-point dilatations carry a checkerboard pressure mode
-/// (docs/numerics.md); the cell mean removes it, as selective reduced integration does for
-/// finite elements.
-pub fn average_dilatation(
-    mut bodies: Query<(&mut Points, &mut CellDilatation, &Bands, &Location)>,
-) {
-    for (mut points, mut cells, bands, location) in &mut bodies {
-        let points = &mut *points;
-        let cells = &mut *cells;
-        // The points have not moved since `locate_points` found their cells.
-        cells.sum(points, &location.cell, bands, |k| {
-            let l = points.velocity_gradient[k];
-            points.volume[k] * (l.x_axis.x + l.y_axis.y)
-        });
-        location
-            .cell
-            .par_iter()
-            .zip(points.velocity_gradient.par_iter_mut())
-            .for_each(|(&c, l)| {
-                let mean = cells.per_volume(c);
-                let shift = 0.5 * (mean - (l.x_axis.x + l.y_axis.y));
-                l.x_axis.x += shift;
-                l.y_axis.y += shift;
-            });
+        gather_affine::<S>(&grid, &mut points, location, field, None);
     }
 }
 
@@ -439,29 +347,6 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
             .par_iter_mut()
             .zip(points.mass.par_iter().zip(points.volume.par_iter()))
             .for_each(|(rho, (&m, &v))| *rho = m / v);
-    }
-}
-
-/// The density the constitutive update sees: the mean `sum m / sum V` of the points in the
-/// point's cell (after they moved). The disconnected phase is then decided at the grid's
-/// resolution: a point that dilated on its own inside a dense cell (a sub-cell pore the grid
-/// cannot close) is not a granular gas, and rejoins the dense phase as soon as the cell is
-/// compressed (docs/numerics.md).
-pub fn cell_density(
-    grid: Res<GridGeometry>,
-    mut bodies: Query<(&mut Points, &mut CellDilatation, &mut Bands, &mut Location)>,
-) {
-    let grid = &*grid;
-    for (mut points, mut cells, mut bands, mut location) in &mut bodies {
-        let points = &mut *points;
-        let cells = &mut *cells;
-        location.find_cells_after_move(grid, &points.position, &mut bands);
-        cells.sum(points, &location.cell, &bands, |k| points.mass[k]);
-        location
-            .cell
-            .par_iter()
-            .zip(points.density.par_iter_mut())
-            .for_each(|(&c, rho)| *rho = cells.per_volume(c));
     }
 }
 
