@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --example column_collapse                 # the scenes as shipped (5 mm)
-//! cargo run --release --example column_collapse -- 'domain.cells=(60, 30)' flip=1.0
+//! cargo run --release --example column_collapse -- 'domain.cells=(60, 30)' transfer=Flip
 //! ```
 //! Extra arguments are `--set`-style overrides applied to both scenes.
 

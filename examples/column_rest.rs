@@ -1,15 +1,16 @@
 //! Granular columns collapse and come to rest (the dense-flow issue's item 4; docs/GRANULAR.md,
 //! "Column collapse"): PS-1 columns of width `L0 = 0.1 m` and aspect ratios `a = H0 / L0`
 //! released against a frictionless wall onto a rough floor, from the shipped a = 2 scene with
-//! its shape, box and end time changed, and its numerics (FLIP with a 5% PIC blend) unless
-//! `--set` says otherwise. Reports when the column came to rest (95% of its points below
+//! its shape, box and end time changed, at the default numerics unless `--set` says
+//! otherwise. Reports when the column came to rest (95% of its points below
 //! 1 cm/s from then on) against `5 sqrt(H0 / g)`, the runout `(Lf - L0) / L0` against
 //! quasi-2D experiments (Lube et al. 2005: `1.2 a` below a = 1.8, `1.9 a^(2/3)` above) and
 //! the disconnected fraction at the end.
 //!
 //! ```text
 //! cargo run --release --example column_rest -- ASPECTS CELL [--set k=v]...
-//! cargo run --release --example column_rest -- 0.5,1,2,4 0.005 --set flip=1.0 --set transfer=Apic
+//! cargo run --release --example column_rest -- 0.5,1,2,4 0.01
+//! cargo run --release --example column_rest -- 0.5,1,2,4 0.005 --set transfer=Apic
 //! ```
 
 use regolith::body::{Phase, PointStates, Points};

@@ -1,17 +1,18 @@
 //! Dense granular flow, long enough to see a layer lose its state.
 //!
 //! The failures these guard against take seconds of simulated time: with the FLIP transfer
-//! (the default) the chute layer packed into 57% of its height within 5 s while its point
+//! (the default until 2026-12-02) the chute layer packed into 57% of its height within 5 s while its point
 //! volumes still said `rho = rho_c`, and most of it disconnected (docs/numerics.md,
 //! "Dense flow"). A test of a few hundred steps cannot see that; these run 10^5 steps and
 //! more on a coarse grid (10 cells per depth; the resolution study is in
 //! docs/VALIDATION.md, `cargo run --release --example dense_flow`).
 //!
-//! They run with `transfer: Apic`, which holds these flows; with FLIP, the default, the
-//! steady-flow test fails within 1 s. APIC is not the default because its per-step
-//! projection makes the impact and the collapses depend on the time step (docs/numerics.md,
-//! "Why APIC is not the default"); until one transfer does both, these tests say which
-//! transfer holds a dense flow, and the issue stays open.
+//! They run with `transfer: Apic`, which holds these flows; with FLIP the steady-flow test
+//! fails within 1 s, and with the default affine FLIP within about 5 s (the cell-averaged
+//! dilatation's sub-cell modes grow under a FLIP-type update: docs/numerics.md, "What breaks
+//! the chute"). APIC is not the default because its per-step projection makes the impact
+//! and the collapses depend on the time step; until one setting does both, these tests say
+//! which transfer holds a dense flow, and the issue stays open.
 
 use regolith::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration, ps1, run};
 
@@ -41,7 +42,7 @@ fn run_chute(
 /// 25 degrees, between atan(mu_s) and atan(mu_2): started on the analytic profile the layer
 /// stays on it for 5 s (2.7 10^5 steps), keeps its depth within 1%, its summed point volume
 /// equal to the area it occupies within 1%, and no point below the surface cells
-/// disconnects. With FLIP (the default transfer) 42% of the bulk is disconnected at 1 s.
+/// disconnects. With FLIP 42% of the bulk is disconnected at 1 s.
 #[test]
 fn a_steady_chute_flow_stays_steady_and_dense() {
     let profile = Bagnold::new(&ps1(), 25f64.to_radians(), DEPTH, 9.81).unwrap();

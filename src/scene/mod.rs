@@ -53,8 +53,8 @@ pub struct Scene {
     /// `Frictional(friction: mu)`.
     #[serde(default)]
     pub contact: Contact,
-    /// How velocities go from the grid back to the points: `Flip` (the paper's, the default),
-    /// `Apic` (affine particle-in-cell) or `AffineFlip(relaxation: n)`; docs/numerics.md.
+    /// How velocities go from the grid back to the points: `AffineFlip(relaxation: 25)` (the
+    /// default), `Flip` (the paper's) or `Apic` (affine particle-in-cell); docs/numerics.md.
     #[serde(default)]
     pub transfer: Transfer,
     /// FLIP fraction of the point velocity update with `transfer: Flip`: 1 is pure FLIP (the
@@ -100,12 +100,11 @@ pub enum StressUpdate {
 /// Every transfer updates a point's velocity the same way: its FLIP update `v + dt a_grid`
 /// is pulled part of the way to the grid's velocity at the point ([`Transfer::pull`]). They
 /// differ in how far, and in whether the point hands the grid an affine field too.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 pub enum Transfer {
     /// FLIP (the paper's transfer): each point keeps its velocity and adds the grid's
     /// acceleration, optionally blended with PIC by `flip` at every step, a damping whose
     /// size is set by the step.
-    #[default]
     Flip,
     /// APIC (Jiang et al. 2015): each point takes the grid velocity at its position and the
     /// affine field `C_p` around it, which it hands back to the grid in the next scatter.
@@ -119,6 +118,18 @@ pub enum Transfer {
     /// relaxation)`). The damping is fixed in time, so the answer converges in the step,
     /// and `tau` shrinks with the cell.
     AffineFlip { relaxation: f64 },
+}
+
+/// The default transfer's relaxation, in p-wave crossings of a cell (docs/numerics.md,
+/// "Affine FLIP": how it was chosen).
+pub const DEFAULT_RELAXATION: f64 = 25.0;
+
+impl Default for Transfer {
+    fn default() -> Self {
+        Transfer::AffineFlip {
+            relaxation: DEFAULT_RELAXATION,
+        }
+    }
 }
 
 impl Transfer {
