@@ -107,7 +107,12 @@ fn internal_force_power_equals_stress_power() {
 fn one_step_conserves_mass_and_momentum() {
     for integration in ["Linear", "CpdiFixed"] {
         for update in ["Usl", "Musl"] {
-            for transfer in ["Flip, flip: 0.0", "Flip, flip: 1.0", "Apic"] {
+            for transfer in [
+                "Flip, flip: 0.0",
+                "Flip, flip: 1.0",
+                "Apic",
+                "AffineFlip(relaxation: 25)",
+            ] {
                 let mut sim = Simulation::new(&scene(integration, update, transfer, "PerPoint"));
                 scramble(&mut sim);
                 let before = momentum(&mut sim);

@@ -12,6 +12,7 @@
 //! after the optional cell averaging of the dilatation (`dilatation`).
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::system::SystemParam;
 use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 
@@ -158,18 +159,43 @@ fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, pull: f64) -> D
     flip + pull * (v_grid - flip)
 }
 
+/// What every velocity update reads: the step, the grid, the scene's rule and the bodies.
+#[derive(SystemParam)]
+pub struct VelocityUpdate<'w, 's> {
+    clock: Res<'w, Clock>,
+    grid: Res<'w, GridGeometry>,
+    rule: Res<'w, VelocityRule>,
+    bodies: Query<
+        'w,
+        's,
+        (
+            &'static Body,
+            &'static mut Points,
+            &'static Location,
+            &'static GridField,
+        ),
+    >,
+}
+
+impl VelocityUpdate<'_, '_> {
+    /// Runs `update(grid, points, location, field, dt, pull)` for every body, with the
+    /// body's pull ([`VelocityRule::pull`]) for this step.
+    fn each(
+        &mut self,
+        mut update: impl FnMut(&GridGeometry, &mut Points, &Location, &GridField, f64, f64),
+    ) {
+        let (dt, grid) = (self.clock.dt, &*self.grid);
+        for (body, mut points, location, field) in &mut self.bodies {
+            let pull = self.rule.pull(dt, grid.cell_size, body.wave_speed);
+            update(grid, &mut points, location, field, dt, pull);
+        }
+    }
+}
+
 /// USL without an affine field: the FLIP/PIC velocity update, advection velocity and
 /// velocity gradient `L = sum v_i (outer) grad S`, in one pass.
-pub fn grid_to_particle(
-    clock: Res<Clock>,
-    grid: Res<GridGeometry>,
-    rule: Res<VelocityRule>,
-    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
-) {
-    let dt = clock.dt;
-    for (body, mut points, location, field) in &mut bodies {
-        let pull = rule.pull(dt, grid.cell_size, body.wave_speed);
-        let points = &mut *points;
+pub fn grid_to_particle(mut bodies: VelocityUpdate) {
+    bodies.each(|_, points, location, field, dt, pull| {
         location
             .footprint
             .par_iter()
@@ -183,7 +209,7 @@ pub fn grid_to_particle(
                 *adv = v_grid;
                 *l = grad;
             });
-    }
+    });
 }
 
 /// The APIC gather at one point: the grid velocity `v`, the velocity gradient `L` and the
@@ -209,17 +235,10 @@ pub fn apic_gather<S: Scheme>(
 
 /// USL with an affine field (APIC, affine FLIP): the point's velocity update, its affine
 /// field and the velocity gradient, in one pass.
-pub fn affine_to_particle<S: Scheme>(
-    clock: Res<Clock>,
-    grid: Res<GridGeometry>,
-    rule: Res<VelocityRule>,
-    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
-) {
-    for (body, mut points, location, field) in &mut bodies {
-        let pull = rule.pull(clock.dt, grid.cell_size, body.wave_speed);
-        let update = Some((clock.dt, pull));
-        gather_affine::<S>(&grid, &mut points, location, field, update);
-    }
+pub fn affine_to_particle<S: Scheme>(mut bodies: VelocityUpdate) {
+    bodies.each(|grid, points, location, field, dt, pull| {
+        gather_affine::<S>(grid, points, location, field, Some((dt, pull)));
+    });
 }
 
 /// `L` and the affine field `C_p` of every point from `field`'s velocities, and with
@@ -263,16 +282,8 @@ fn gather_affine<S: Scheme>(
 /// MUSL pass 1: every point's velocity update ([`new_velocity`]) and its advection
 /// velocity. With an affine transfer the affine field is taken in pass 3 from the remapped
 /// velocities, like `L` and for the same reason (nodes of tiny mass).
-pub fn musl_velocity(
-    clock: Res<Clock>,
-    grid: Res<GridGeometry>,
-    rule: Res<VelocityRule>,
-    mut bodies: Query<(&Body, &mut Points, &Location, &GridField)>,
-) {
-    let dt = clock.dt;
-    for (body, mut points, location, field) in &mut bodies {
-        let pull = rule.pull(dt, grid.cell_size, body.wave_speed);
-        let points = &mut *points;
+pub fn musl_velocity(mut bodies: VelocityUpdate) {
+    bodies.each(|_, points, location, field, dt, pull| {
         location
             .footprint
             .par_iter()
@@ -284,7 +295,7 @@ pub fn musl_velocity(
                 *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
             });
-    }
+    });
 }
 
 /// MUSL pass 2: nodal velocities from the updated point momenta `m v`, walls applied.
