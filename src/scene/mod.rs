@@ -112,11 +112,11 @@ pub enum Transfer {
     /// projection is made at every step, so what it dissipates grows as the step shrinks
     /// (the impact's depth falls from 0.31 to 0.18 m between CFL 1 and 0.05).
     Apic,
-    /// APIC's affine scatter with FLIP's velocity update, whose departure from the grid's
-    /// velocity relaxes over `relaxation` p-wave crossings of a cell, `tau = relaxation h /
-    /// c` (the unit of the CFL number, so a step removes the fraction `1 - exp(-CFL /
-    /// relaxation)`). The damping is fixed in time, so the answer converges in the step,
-    /// and `tau` shrinks with the cell.
+    /// The default (`relaxation: 25`): APIC's affine scatter with FLIP's velocity update,
+    /// whose departure from the grid's velocity relaxes over `relaxation` p-wave crossings
+    /// of a cell, `tau = relaxation h / c` (the unit of the CFL number, so a step removes
+    /// the fraction `1 - exp(-CFL / relaxation)`). The damping is fixed in time, so the
+    /// answer converges in the step, and `tau` shrinks with the cell.
     AffineFlip { relaxation: f64 },
 }
 
