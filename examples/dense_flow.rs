@@ -8,7 +8,7 @@
 //! cargo run --release --example dense_flow -- 20,25,28 10,20 25 1
 //! ```
 //! Prints one row per moment (top, volume ratio, disconnected fractions, mean speed,
-//! profile error), the last at the end of the run; every run is at the default numerical settings
+//! profile error, rms speed normal to the bed), the last at the end of the run; every run is at the default numerical settings
 //! unless `--set` says otherwise.
 
 use regolith::verify::chute::{Bagnold, ChuteState, DEPTH, ps1, run};
@@ -38,9 +38,9 @@ fn main() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
     let material = ps1();
     println!(
-        "| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | wall (s) |"
+        "| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | wall (s) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for &deg in &angles {
         for &per_depth in &resolutions {
             let profile = Bagnold::new(&material, deg.to_radians(), DEPTH, 9.81);
@@ -48,7 +48,7 @@ fn main() {
             let started = std::time::Instant::now();
             let row = |t: f64, m: &ChuteState| {
                 println!(
-                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.0} |",
+                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.1e} | {:.0} |",
                     m.top / DEPTH,
                     m.volume_ratio,
                     m.disconnected,
@@ -56,6 +56,7 @@ fn main() {
                     m.mean_speed,
                     m.profile_error.map_or("-".into(), |e| format!("{e:.3}")),
                     m.speed_95,
+                    m.normal_rms,
                     started.elapsed().as_secs_f64()
                 );
             };

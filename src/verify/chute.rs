@@ -138,6 +138,10 @@ pub struct ChuteState {
     pub mean_speed: f64,
     /// 95th percentile of the point speeds (m/s).
     pub speed_95: f64,
+    /// Mass-weighted rms of the points' speed normal to the bed (m/s): a steady layer has
+    /// none, so this is the size of any disturbance (docs/numerics.md, "What breaks the
+    /// chute").
+    pub normal_rms: f64,
     /// RMS over cell rows of (row-mean speed - analytic), over the analytic surface
     /// speed; `None` without a profile.
     pub profile_error: Option<f64>,
@@ -196,6 +200,11 @@ pub fn measure(
         disconnected: (0..n).filter(|&k| gas(k)).count() as f64 / n as f64,
         mean_speed,
         speed_95: super::quantile(points.velocity.iter().map(|v| v.length()).collect(), 0.95),
+        normal_rms: ((0..n)
+            .map(|k| points.mass[k] * points.velocity[k].y.powi(2))
+            .sum::<f64>()
+            / mass)
+            .sqrt(),
         profile_error,
     }
 }
