@@ -3,7 +3,7 @@
 //!
 //! What a step reads from the previous one: the clock, every body's points, point states and
 //! material history, the energy bound, and (for outputs) the trajectory rows and each output
-//! plugin's schedule. Grid fields, cell sums and whole-body measures are recomputed from the
+//! plugin's schedule, and the instant of an impact's first contact. Grid fields, cell sums and whole-body measures are recomputed from the
 //! points, so they are not saved. The file is bincode (f64 as raw bits), written atomically;
 //! the scene itself is the run directory's `scene.ron`.
 
@@ -13,12 +13,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::diagnostics::EnergyLimit;
+use crate::impact::{ContactInstant, ImpactWatch};
 use crate::output::write_atomic;
 use crate::scene::Scene;
 use crate::sim::{Clock, Simulation};
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 2;
+const FORMAT: u32 = 3;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -29,6 +30,8 @@ pub struct Checkpoint {
     clock: Clock,
     energy_bound: Option<f64>,
     trajectory: Vec<Vec<f64>>,
+    /// The `Impact` output's first contact, and its last state before contact.
+    impact: Option<(Option<ContactInstant>, Option<ContactInstant>)>,
     bodies: Vec<BodyCheckpoint>,
 }
 
@@ -74,6 +77,10 @@ impl Checkpoint {
             clock: sim.clock().clone(),
             energy_bound: sim.world.resource::<EnergyLimit>().bound,
             trajectory: sim.trajectory().rows.clone(),
+            impact: sim
+                .world
+                .get_resource::<ImpactWatch>()
+                .map(|w| (w.contact, w.before)),
             bodies,
         }
     }
@@ -137,6 +144,11 @@ impl Checkpoint {
         sim.trajectory_mut().rows = self.trajectory;
         for output in &scene.outputs {
             output.resume(&mut sim.world, time);
+        }
+        if let (Some(mut watch), Some((contact, before))) =
+            (sim.world.get_resource_mut::<ImpactWatch>(), self.impact)
+        {
+            (watch.contact, watch.before) = (contact, before);
         }
         Ok(())
     }

@@ -372,6 +372,34 @@ fn report(summary: &Summary, out: &Path) {
         "  wall time per step set: {}",
         set_shares(&summary.timings_s)
     );
+    if let Some(line) = impact_line(summary) {
+        println!("  {line}");
+    }
+}
+
+/// The impact result in one line, or why there is none (when the scene asked for one).
+fn impact_line(summary: &Summary) -> Option<String> {
+    if let Some(why) = &summary.impact_not_measured {
+        return Some(format!("impact: not measured: {why}"));
+    }
+    let m = summary.impact.as_ref()?;
+    let contact = format!(
+        "first contact at {:.4} s, {:.3} m/s, {:.2} J/m",
+        m.contact_time, m.contact_speed, m.impact_energy
+    );
+    Some(match (m.final_depth, m.stopping_time) {
+        (Some(depth), Some(stop)) => format!(
+            "impact: at rest; final depth {depth:.4} m, stopping time {stop:.4} s ({contact})"
+        ),
+        _ => format!(
+            "impact: NOT at rest, no final depth or stopping time: {} (depth so far {:.4} m; {contact})",
+            m.not_at_rest
+                .as_deref()
+                .unwrap_or("not at rest")
+                .trim_start_matches("not at rest: "),
+            m.depth_at_end
+        ),
+    })
 }
 
 /// `name seconds (share)` for each step set, the largest first.

@@ -300,7 +300,14 @@ pub fn load_run(dir: &Path, body: &str) -> Result<PonceletRun, String> {
     let gravity = -summary["gravity"][1].as_f64().ok_or_else(|| {
         format!("{label}/summary.json: no gravity (written by an older regolith)")
     })?;
-    let contact = summary["impact"]["contact_time"].as_f64().unwrap_or(0.0);
+    let impact = &summary["impact"];
+    if impact["at_rest"] == false {
+        return Err(format!(
+            "{label}: the intruder is {}; a Poncelet fit needs runs that end at rest (rerun with a later time.end)",
+            impact["not_at_rest"].as_str().unwrap_or("not at rest")
+        ));
+    }
+    let contact = impact["contact_time"].as_f64().unwrap_or(0.0);
     let csv = read("trajectory.csv")?;
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();

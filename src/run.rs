@@ -172,13 +172,19 @@ pub fn summarize(
         TimeStep::Fixed(dt) => ("fixed", dt),
         TimeStep::Cfl(_) => ("cfl", clock.dt_max),
     };
-    let impact = impact_metrics(sim, &bodies);
+    let (impact, impact_not_measured) = match impact_metrics(sim, &bodies) {
+        None => (None, None),
+        Some(Ok(m)) => (Some(m), None),
+        Some(Err(why)) => (None, Some(why)),
+    };
     let pressure_front = sim
         .world
         .get_resource::<crate::front::PressureRecord>()
         .and_then(|r| r.front());
     Summary {
         impact,
+        impact_not_measured,
+        units: crate::output::summary::units(),
         pressure_front,
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),
@@ -214,18 +220,49 @@ pub fn summarize(
     }
 }
 
-/// The impact measures of an `Impact` output, from the trajectory rows.
-fn impact_metrics(sim: &Simulation, bodies: &[BodySummary]) -> Option<ImpactMetrics> {
+/// The impact measures of an `Impact` output, from the trajectory rows and the recorded
+/// first contact: `None` without an `Impact` output, `Some(Err(why))` when they could not
+/// be measured.
+fn impact_metrics(
+    sim: &Simulation,
+    bodies: &[BodySummary],
+) -> Option<Result<ImpactMetrics, String>> {
     let watch = sim.world.get_resource::<ImpactWatch>()?;
-    let table = sim.trajectory();
-    let (y, vy) = (
-        table.column(&watch.body, "y")?,
-        table.column(&watch.body, "vy")?,
-    );
-    let y = table.series(y);
-    let contact = watch.contact_row(&y)?;
-    let mass = bodies.iter().find(|b| b.name == watch.body)?.mass;
-    analyse(&table.series(0), &y, &table.series(vy), contact, mass)
+    let measure = || {
+        let table = sim.trajectory();
+        let series = |q: &str| {
+            table
+                .column(&watch.body, q)
+                .map(|c| table.series(c))
+                .ok_or_else(|| format!("the trajectory has no column {}_{q}", watch.body))
+        };
+        let (y, vx, vy) = (series("y")?, series("vx")?, series("vy")?);
+        let contact = watch.contact.ok_or_else(|| {
+            format!(
+                "body \"{}\" felt no contact force before the run ended at t = {} s",
+                watch.body,
+                sim.clock().time
+            )
+        })?;
+        let mass = bodies
+            .iter()
+            .find(|b| b.name == watch.body)
+            .map(|b| b.mass)
+            .ok_or_else(|| format!("no body \"{}\"", watch.body))?;
+        analyse(
+            (&table.series(0), &y, &vx, &vy),
+            &contact,
+            watch.surface,
+            mass,
+        )
+        .ok_or_else(|| {
+            format!(
+                "fewer than two trajectory rows after first contact at t = {} s",
+                contact.time
+            )
+        })
+    };
+    Some(measure())
 }
 
 /// Rough memory use of a scene's state in bytes: points, material history and one nodal

@@ -194,7 +194,13 @@ fn measured(out: &Path, run: &Planned) -> (String, Measured) {
             .map(|(s, p)| s * p),
         metrics: METRICS.map(|k| summary["impact"][k].as_f64()),
     };
-    ("completed".into(), m)
+    // A run whose intruder had not stopped has no final depth or stopping time to compare.
+    let status = if summary["impact"]["at_rest"] == false {
+        "not at rest"
+    } else {
+        "completed"
+    };
+    (status.into(), m)
 }
 
 fn relative_error(x: Option<f64>, reference: Option<f64>) -> Option<f64> {

@@ -188,7 +188,8 @@ fn write_table(
         csv.push(',');
         csv.push_str(m);
     }
-    csv.push_str(",failure\n");
+    // Appended after `failure` so that columns scripts already read keep their places.
+    csv.push_str(",failure,at_rest,depth_at_end\n");
     for (i, run) in runs.iter().enumerate() {
         let summary = read_summary(&out.join(&run.dir))
             .filter(|s| is_completed(s, &run.sets) || s["status"] == "failed")
@@ -220,6 +221,17 @@ fn write_table(
             .or_else(|| summary["failure"].as_str().map(String::from))
             .unwrap_or_default();
         row.push(field(&failure));
+        let impact = &summary["impact"];
+        row.push(
+            impact["at_rest"]
+                .as_bool()
+                .map_or(String::new(), |b| b.to_string()),
+        );
+        row.push(
+            impact["depth_at_end"]
+                .as_f64()
+                .map_or(String::new(), |v| v.to_string()),
+        );
         csv.push_str(&row.join(","));
         csv.push('\n');
     }

@@ -169,6 +169,18 @@ fn bad_scenes_give_their_messages() {
             None,
         ),
         (12, "        ),,", "", Some(12)),
+        (
+            18,
+            r#"    ], outputs: [Impact(body: "disk", surface: 0.4)],"#,
+            r#"Impact: body "disk" is not in the scene (its bodies: "block", "ball")"#,
+            Some(18),
+        ),
+        (
+            18,
+            r#"    ], outputs: [Impact(body: "ball", surface: 0.4)],"#,
+            r#"body "ball" must be tracked"#,
+            Some(18),
+        ),
     ];
     let registries = Regolith::default().registries();
     let mut wrong = Vec::new();

@@ -119,3 +119,43 @@ fn the_rate_independent_bed_lets_the_intruder_deeper() {
     );
     assert!(v < 0.05, "the intruder still moves at {v} m/s");
 }
+
+/// First contact is where the bed first pushes on the intruder through the grid. An
+/// intruder dropped from 5 cm above the surface at 1 m/s falls freely until then: its
+/// energy at the recorded instant is its free-fall energy at the recorded height, and the
+/// instant comes less than two cells before its outline reaches the surface (grid contact
+/// begins where the bodies share nodes). The measure this replaced, the first trajectory row
+/// within the intruder's initial height of the surface, was blind to the interaction.
+#[test]
+fn a_dropped_intruder_falls_freely_until_first_contact() {
+    let (drop, v0, g) = (0.05, 1.0, 9.81);
+    let scene = common::scene(
+        "impact_tipped_coarse",
+        &[
+            "domain.cells=(25, 25)",
+            "time.end=0.15",
+            &format!("bodies.intruder.shape.tip=(0.455, {})", 0.6825 + drop),
+            &format!("bodies.intruder.velocity=(0.0, -{v0})"),
+        ],
+    );
+    let mut sim = Simulation::new(&scene);
+    let y0 = sim.bodies()[1].1.centre_of_mass.y;
+    sim.run(|_| {}).unwrap();
+    let watch = sim.world.resource::<regolith::impact::ImpactWatch>();
+    let c = watch.contact.expect("the intruder hits the bed by 0.15 s");
+    let v = glam::DVec2::from(c.velocity).length();
+    let fallen = y0 - c.centre_of_mass[1];
+    let free_fall = (v0 * v0 + 2.0 * g * fallen).sqrt();
+    assert!(
+        (v - free_fall).abs() < 0.005 * free_fall,
+        "speed {v} m/s at first contact after falling {fallen} m, free fall gives {free_fall}"
+    );
+    let h = scene.grid().cell_size;
+    let gap = c.lowest - watch.surface;
+    assert!(
+        gap > 0.0 && gap < 2.0 * h,
+        "the outline is {gap} m above the surface at first contact (cell {h} m)"
+    );
+    let t_geometric = ((v0 * v0 + 2.0 * g * drop).sqrt() - v0) / g;
+    assert!(c.time < t_geometric, "{} s vs {t_geometric} s", c.time);
+}

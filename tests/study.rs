@@ -1,4 +1,5 @@
-//! `regolith study`: a tiny study (coarse impact, a few steps) plans one run per distinct
+//! `regolith study`: a tiny study (the coarse impact on 12-20 cells, to 0.4 s so that every
+//! intruder is at rest: a run cut short has no final depth to compare) plans one run per distinct
 //! setting, measures every row against the named reference, marks the frontier, draws the
 //! plot, and skips finished runs when run again.
 
@@ -16,7 +17,7 @@ fn write_study(dir: &std::path::Path) -> std::path::PathBuf {
         r#"Study(
     name: "tiny",
     scene: "{}",
-    set: ["time.end=0.02", "domain.cells=(12, 12)"],
+    set: ["time.end=0.4", "domain.cells=(12, 12)"],
     reference: (label: "20 cells, CFL 0.3", set: ["domain.cells=(20, 20)", "time.step=Cfl(0.3)"]),
     knobs: [
         (name: "cells", values: [(label: "12", set: []), (label: "16", set: ["domain.cells=(16, 16)"])]),

@@ -351,3 +351,45 @@ fn fit_writes_a_table_or_says_why_not() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("summary.json"), "{err}");
 }
+
+/// A run that ends while the intruder still moves reports no final depth or stopping
+/// time: `summary.json` says `at_rest: false` and why, the run's last line says so, and
+/// `fit` refuses the run instead of fitting half a trajectory.
+#[test]
+fn an_impact_cut_short_has_no_final_depth_and_fit_refuses_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("short");
+    let scene = scene_path("impact_tipped_coarse");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--set",
+        "domain.cells=(25, 25)",
+        "--set",
+        "time.end=0.02",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("impact: NOT at rest, no final depth"),
+        "{stdout}"
+    );
+    let s = read_json(&out.join("summary.json"));
+    let impact = &s["impact"];
+    assert_eq!(impact["at_rest"], false, "{impact}");
+    assert!(impact["final_depth"].is_null() && impact["stopping_time"].is_null());
+    assert!(impact["depth_at_end"].as_f64().unwrap() > 0.0);
+    assert!(
+        impact["not_at_rest"]
+            .as_str()
+            .unwrap()
+            .contains("speed at the end")
+    );
+    assert_eq!(s["units"]["impact.final_depth"], "m");
+    let o = regolith(&["fit", out.to_str().unwrap(), out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("not at rest"), "{err}");
+}

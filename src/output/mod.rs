@@ -33,6 +33,11 @@ pub trait Output: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     /// The name used in scene files, e.g. `Snapshots`.
     const NAME: &'static str;
     fn validate(&self) -> Result<(), String>;
+    /// What must hold between the output and the rest of the scene (e.g. that a body it
+    /// names exists); `check` reports a failure at the output's line. By default nothing.
+    fn check_scene(&self, _scene: &crate::scene::Scene) -> Result<(), String> {
+        Ok(())
+    }
     /// Adds the output's resources and its systems (in [`crate::step::StepSet::Output`]).
     fn install(&self, world: &mut World, schedule: &mut Schedule);
     /// Re-aligns the output's own schedule with a run resumed at `time` (the state it
@@ -45,6 +50,7 @@ pub trait OutputSpec: Debug + Send + Sync {
     fn name(&self) -> &'static str;
     fn clone_spec(&self) -> Box<dyn OutputSpec>;
     fn validate(&self) -> Result<(), String>;
+    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String>;
     fn install(&self, world: &mut World, schedule: &mut Schedule);
     fn resume(&self, world: &mut World, time: f64);
 }
@@ -60,6 +66,9 @@ impl<O: Output> OutputSpec for O {
     }
     fn validate(&self) -> Result<(), String> {
         Output::validate(self)
+    }
+    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+        Output::check_scene(self, scene)
     }
     fn install(&self, world: &mut World, schedule: &mut Schedule) {
         Output::install(self, world, schedule)

@@ -43,6 +43,10 @@ pub struct Summary {
     /// The paper's impact measures, when the scene has an `Impact` output and the body hit
     /// its surface.
     pub impact: Option<ImpactMetrics>,
+    /// Why `impact` is null although the scene asked for it.
+    pub impact_not_measured: Option<String>,
+    /// The unit of every dimensional field, by name (`impact.final_depth` for nested ones).
+    pub units: BTreeMap<String, String>,
     /// The pressure front's speed, when the scene asks for `PressureFront(..)`.
     pub pressure_front: Option<crate::front::FrontMetrics>,
 }
@@ -64,4 +68,31 @@ pub struct BodySummary {
     /// `Points::fingerprint` of the final state, 16 hex digits: equal for two runs exactly
     /// when their final point states are bitwise equal.
     pub state_hash: String,
+}
+
+/// The `units` map of `summary.json`.
+pub fn units() -> BTreeMap<String, String> {
+    let top = [
+        ("time", "s"),
+        ("dt", "s"),
+        ("dt_min", "s"),
+        ("dt_max", "s"),
+        ("cell_size", "m"),
+        ("gravity", "m/s^2"),
+        ("wall_s", "s (wall clock)"),
+        ("particle_steps_per_s", "1/s (wall clock)"),
+        ("timings_s", "s (wall clock)"),
+        ("bodies.mass", "kg/m (per metre of thickness)"),
+        ("bodies.centre_of_mass", "m"),
+        ("bodies.velocity", "m/s"),
+        ("bodies.kinetic_energy", "J/m (per metre of thickness)"),
+    ];
+    top.iter()
+        .map(|&(k, u)| (k.to_string(), u.to_string()))
+        .chain(
+            crate::impact::UNITS
+                .iter()
+                .map(|&(k, u)| (format!("impact.{k}"), u.to_string())),
+        )
+        .collect()
 }

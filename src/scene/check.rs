@@ -227,6 +227,14 @@ impl Scene {
             return err("bodies", "the scene needs at least one body".to_string());
         }
         self.check_bodies(text, origin)?;
+        for output in &self.outputs {
+            if let Err(e) = output.check_scene(self) {
+                return err(
+                    &format!("{}(", output.name()),
+                    format!("{}: {e}", output.name()),
+                );
+            }
+        }
         if let Some(cfl) = self.fixed_step_cfl()
             && cfl > 1.0
             && !self.time.allow_unstable
