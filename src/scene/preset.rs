@@ -1,9 +1,9 @@
 //! Numerical presets: `preset: Fast | Accurate | Fine | Paper` in any scene (or `--preset`).
 //! The first three are placed by the speed-accuracy study `studies/impact_knobs.ron`
-//! (docs/ACCURACY.md): `Accurate` is on its frontier, `Fast` next to it (the frontier's CFL
-//! 0.8 is nearer the stability limit and closer only by an error cancellation), `Fine` is its
-//! reference. `Paper` is the paper's own numerics: as accurate as `Accurate` at five times
-//! the cost.
+//! (docs/ACCURACY.md, rerun at the default affine FLIP transfer): `Accurate` and `Paper`
+//! (the paper's own numerics, at five times `Accurate`'s cost) are on its frontier, `Fine` is
+//! its reference, `Fast` is next to it (the frontier's CFL 1.0 at the same cells is at the
+//! stability limit and closer only by an error cancellation).
 //!
 //! A preset sets the numerical knobs relative to the scene as written, so that a scene at
 //! the paper's resolution gets the study's settings: `Fast` halves the cells per axis, and
