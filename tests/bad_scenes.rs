@@ -181,6 +181,12 @@ fn bad_scenes_give_their_messages() {
             r#"body "ball" must be tracked"#,
             Some(18),
         ),
+        (
+            18,
+            "    ], outputs: [Snapshots(every: 0.001),\n        Snapshots(every: 0.002)],",
+            "Snapshots is listed twice in outputs",
+            Some(19),
+        ),
     ];
     let registries = Regolith::default().registries();
     let mut wrong = Vec::new();
@@ -250,4 +256,35 @@ fn overrides_are_checked_like_the_file() {
     );
     let (scene, _) = set("bodies.ball.velocity=(0.0, -3.5)").unwrap();
     assert_eq!(scene.bodies[1].velocity.y, -3.5);
+}
+
+/// `check` and `run` warn about a body too coarse for the grid to resolve, naming it: the
+/// coarse impact's intruder is fine on 50 cells (134 points, 5.3 cells across) and not on
+/// 25 (36 points, 2.7 cells), also when a preset does the coarsening.
+#[test]
+fn coarsely_resolved_bodies_are_warned_about() {
+    let registries = Regolith::default().registries();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let warnings = |scene: &str, sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        Scene::load(&path.join(scene), &sets, &registries)
+            .unwrap()
+            .0
+            .warnings()
+    };
+    let coarse = |w: &[String]| {
+        w.iter()
+            .any(|w| w.contains("body \"intruder\" is coarsely resolved"))
+    };
+    assert!(!coarse(&warnings("impact_tipped_coarse.ron", &[])));
+    let w = warnings("impact_tipped_coarse.ron", &["domain.cells=(25, 25)"]);
+    assert!(
+        coarse(&w) && w.iter().any(|w| w.contains("36 material points")),
+        "{w:?}"
+    );
+    let w = warnings("impact_tipped_coarse.ron", &["preset=Fast"]);
+    assert!(
+        coarse(&w) && w.iter().any(|w| w.contains("the preset Fast")),
+        "{w:?}"
+    );
 }

@@ -16,6 +16,11 @@ const MAX_CELLS: usize = 20_000_000;
 const MAX_POINTS: usize = 50_000_000;
 
 /// The 1-based line of the first occurrence of `needle` in `text`, if any.
+/// Fewer material points than this in a body draw a resolution warning.
+pub const MIN_POINTS: usize = 100;
+/// Fewer cells than this across a body's smallest extent draw a resolution warning.
+pub const MIN_CELLS_ACROSS: f64 = 4.0;
+
 fn line_of(text: &str, needle: &str) -> Option<usize> {
     let at = text.find(needle)?;
     Some(text[..at].matches('\n').count() + 1)
@@ -69,7 +74,32 @@ impl Scene {
                     .to_string(),
             );
         }
+        w.extend(self.resolution_warnings());
         w
+    }
+
+    /// A body resolved by fewer than [`MIN_POINTS`] points or [`MIN_CELLS_ACROSS`] cells
+    /// across its smallest extent: its motion and stresses are then mostly the grid's.
+    fn resolution_warnings(&self) -> Vec<String> {
+        let grid = self.grid();
+        let preset = self.preset.map_or(String::new(), |p| {
+            format!(" (the preset {p:?} sets the resolution)")
+        });
+        self.bodies
+            .iter()
+            .filter_map(|b| {
+                let points = fill(&*b.shape, &grid, b.points_per_cell).positions.len();
+                let (lo, hi) = b.shape.bounds();
+                let extent = hi.min(grid.max()) - lo.max(grid.origin);
+                let across = extent.x.min(extent.y) / grid.cell_size;
+                (points < MIN_POINTS || across < MIN_CELLS_ACROSS).then(|| {
+                    format!(
+                        "body \"{}\" is coarsely resolved: {points} material points, {across:.1} cells across its smallest extent (at least {MIN_POINTS} points and {MIN_CELLS_ACROSS} cells are advised){preset}",
+                        b.name
+                    )
+                })
+            })
+            .collect()
     }
 
     /// The CFL number `dt (c + |v|) / h` of a `Fixed` step at the start, from each body's
@@ -227,7 +257,29 @@ impl Scene {
             return err("bodies", "the scene needs at least one body".to_string());
         }
         self.check_bodies(text, origin)?;
+        let mut listed = HashSet::new();
         for output in &self.outputs {
+            let name = output.name();
+            if !listed.insert(name) {
+                // Point at the second listing: the first is fine on its own.
+                let needle = format!("{name}(");
+                let second = text
+                    .match_indices(&needle)
+                    .nth(1)
+                    .map(|(at, _)| text[..at].matches('\n').count() + 1);
+                let message = format!(
+                    "{name} is listed twice in outputs; each output can be listed once (one {name} series per run)"
+                );
+                return Err(match second {
+                    Some(line) => SceneError {
+                        file: origin.to_string(),
+                        line: Some(line),
+                        column: None,
+                        message,
+                    },
+                    None => SceneError::file(origin, message),
+                });
+            }
             if let Err(e) = output.check_scene(self) {
                 return err(
                     &format!("{}(", output.name()),
