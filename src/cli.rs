@@ -257,6 +257,20 @@ fn camel_case(name: &str) -> String {
 /// Parses the process arguments and runs the command with the plugins of `app`.
 pub fn main_with(app: Regolith) -> ExitCode {
     let cli = Cli::parse();
+    // A first SIGINT / SIGTERM lets every run finish its step and save itself; a second
+    // one stops at once. Without a handler (it could not be installed) a signal kills.
+    let handler = ctrlc::set_handler(|| {
+        if crate::run::request_stop() {
+            eprintln!("\nstopping now, without saving");
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\ninterrupted: finishing the step, then saving checkpoint.bin and summary.json (interrupt again to stop at once)"
+        );
+    });
+    if let Err(e) = handler {
+        eprintln!("warning: no signal handler ({e}): an interrupted run will not save itself");
+    }
     let registries = app.registries();
     let result = match cli.command {
         Command::Run {
@@ -322,6 +336,10 @@ pub fn main_with(app: Regolith) -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e @ Error::Interrupted { .. }) => {
+            eprintln!("{e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

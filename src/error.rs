@@ -78,6 +78,12 @@ pub enum Error {
         context: String,
         source: std::io::Error,
     },
+    /// A signal asked the run to stop; it finished its step and saved its state.
+    #[error(
+        "interrupted at t = {time} s; summary.json says `interrupted` and checkpoint.bin holds the state: `regolith resume {}` continues the run",
+        dir.display()
+    )]
+    Interrupted { time: f64, dir: std::path::PathBuf },
 }
 
 impl Error {

@@ -4,11 +4,13 @@
 //! overrides applied), `trajectory.csv` (streamed as `trajectory.csv.part`, renamed at the
 //! end), `checkpoint.bin` when asked (atomically, every N steps) and `summary.json` (written
 //! atomically last). A run that stops on a fault still writes all of them, with
-//! `"status": "failed"` and the reason in the summary. `resume_run` continues a run from its
-//! checkpoint.
+//! `"status": "failed"` and the reason in the summary; one stopped by a signal
+//! ([`request_stop`]) finishes its step, writes `checkpoint.bin` and a summary with
+//! `"status": "interrupted"`. `resume_run` continues a run from its checkpoint.
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::checkpoint::Checkpoint;
@@ -97,6 +99,23 @@ pub fn resume_run(
     run_to_end(sim, &scene, &from, out, checkpoints, progress)
 }
 
+/// Set by [`request_stop`] (the command line's SIGINT / SIGTERM handler); every run in
+/// the process stops after its current step.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Asks every run in the process to stop after its current step, save a checkpoint and
+/// write its summary as `interrupted`. Returns whether a stop had been asked already.
+pub fn request_stop() -> bool {
+    STOP.swap(true, Ordering::SeqCst)
+}
+
+/// How a run's loop ended.
+enum Ending {
+    Finished,
+    Fault(Fault),
+    Interrupted,
+}
+
 fn run_to_end(
     mut sim: Simulation,
     scene: &Scene,
@@ -106,32 +125,56 @@ fn run_to_end(
     progress: &mut dyn Progress,
 ) -> Result<Summary, Error> {
     let started = Instant::now();
-    let result = on_worker(|| -> Result<Result<(), Fault>, Error> {
+    let ending = on_worker(|| -> Result<Ending, Error> {
         while !sim.finished() {
             if let Err(f) = sim.step() {
-                return Ok(Err(f));
+                return Ok(Ending::Fault(f));
             }
             progress.step(sim.clock());
-            if let Some(every) = checkpoints.0
-                && sim.clock().step.is_multiple_of(every)
-                && !sim.finished()
-            {
+            let stop = STOP.load(Ordering::SeqCst) && !sim.finished();
+            let due = checkpoints
+                .0
+                .is_some_and(|every| sim.clock().step.is_multiple_of(every))
+                && !sim.finished();
+            if stop || due {
                 Checkpoint::capture(&mut sim, scene, from.file, from.overrides)
                     .write(&out.join("checkpoint.bin"))
                     .map_err(io_error(out, "cannot write checkpoint.bin"))?;
             }
+            if stop {
+                return Ok(Ending::Interrupted);
+            }
         }
-        Ok(Ok(()))
+        Ok(Ending::Finished)
     })?;
     let wall = started.elapsed().as_secs_f64();
     sim.trajectory_mut()
         .close()
         .map_err(io_error(out, "cannot finish trajectory.csv"))?;
-    let summary = summarize(&mut sim, scene, from, wall, result.as_ref().err());
+    let (status, failure) = match &ending {
+        Ending::Finished => ("completed", None),
+        Ending::Fault(f) => ("failed", Some(f.to_string())),
+        Ending::Interrupted => (
+            "interrupted",
+            Some(format!(
+                "interrupted by a signal at t = {} s (trajectory.csv ends there); `regolith resume {}` continues the run",
+                sim.clock().time,
+                out.display()
+            )),
+        ),
+    };
+    let summary = summarize(&mut sim, scene, from, wall, status, failure);
     let json = serde_json::to_string_pretty(&summary).expect("a summary always serialises");
     write_atomic(&out.join("summary.json"), json.as_bytes())
         .map_err(io_error(out, "cannot write summary.json"))?;
-    result.map(|_| summary).map_err(Error::from)
+    match ending {
+        Ending::Finished => Ok(summary),
+        Ending::Fault(f) => Err(Error::from(f)),
+        Ending::Interrupted => Err(Error::Interrupted {
+            time: summary.time,
+            dir: out.to_path_buf(),
+        }),
+    }
 }
 
 /// The summary of a simulation in its current state.
@@ -140,7 +183,8 @@ pub fn summarize(
     scene: &Scene,
     from: &Provenance,
     wall_s: f64,
-    fault: Option<&Fault>,
+    status: &str,
+    failure: Option<String>,
 ) -> Summary {
     let clock = sim.clock().clone();
     let grid = sim.grid().clone();
@@ -189,13 +233,8 @@ pub fn summarize(
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),
         overrides: from.overrides.to_vec(),
-        status: if fault.is_some() {
-            "failed"
-        } else {
-            "completed"
-        }
-        .to_string(),
-        failure: fault.map(|f| f.to_string()),
+        status: status.to_string(),
+        failure,
         integration: format!("{:?}", scene.integration),
         steps: clock.step,
         time: clock.time,

@@ -393,3 +393,77 @@ fn an_impact_cut_short_has_no_final_depth_and_fit_refuses_it() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("not at rest"), "{err}");
 }
+
+/// SIGINT: the run finishes its step, writes `checkpoint.bin` and a summary marked
+/// `interrupted`, says how to resume and exits with 130; `regolith resume` then ends in the
+/// same state as a run never interrupted.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_keeps_its_record_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_path("impact_tipped_coarse");
+    let args = |out: &Path| -> Vec<String> {
+        [
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "domain.cells=(25, 25)",
+            "--set",
+            "time.end=0.3",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let out = dir.path().join("cut");
+    let child = Command::new(env!("CARGO_BIN_EXE_regolith"))
+        .args(args(&out))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the run is stepping (its trajectory has rows), then interrupt it.
+    let part = out.join("trajectory.csv.part");
+    let started = std::time::Instant::now();
+    while std::fs::read_to_string(&part).map_or(0, |t| t.lines().count()) < 5 {
+        assert!(started.elapsed().as_secs() < 60, "the run never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("regolith resume"), "{err}");
+    let s = read_json(&out.join("summary.json"));
+    assert_eq!(s["status"], "interrupted");
+    let t = s["time"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 0.3, "{t}");
+    assert!(out.join("checkpoint.bin").exists());
+
+    let o = regolith(&["resume", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let whole = dir.path().join("whole");
+    let a: Vec<String> = args(&whole);
+    let a: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
+    let o = regolith(&a);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (resumed, uncut) = (
+        read_json(&out.join("summary.json")),
+        read_json(&whole.join("summary.json")),
+    );
+    assert_eq!(resumed["status"], "completed");
+    for b in 0..2 {
+        assert_eq!(
+            resumed["bodies"][b]["state_hash"], uncut["bodies"][b]["state_hash"],
+            "body {b}"
+        );
+    }
+    assert_eq!(resumed["impact"], uncut["impact"]);
+}
