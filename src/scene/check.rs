@@ -21,14 +21,20 @@ pub const MIN_POINTS: usize = 100;
 /// Fewer cells than this across a body's smallest extent draw a resolution warning.
 pub const MIN_CELLS_ACROSS: f64 = 4.0;
 
-fn line_of(text: &str, needle: &str) -> Option<usize> {
-    let at = text.find(needle)?;
+/// The line of the `n`-th (from 0) appearance of `needle`.
+fn line_of(text: &str, needle: &str, n: usize) -> Option<usize> {
+    let (at, _) = text.match_indices(needle).nth(n)?;
     Some(text[..at].matches('\n').count() + 1)
 }
 
 /// An error pointing at the line where `needle` first appears (the file alone otherwise).
 fn near(text: &str, origin: &str, needle: &str, message: String) -> SceneError {
-    match line_of(text, needle) {
+    near_nth(text, origin, needle, 0, message)
+}
+
+/// An error pointing at the line where `needle` appears for the `n`-th time (from 0).
+fn near_nth(text: &str, origin: &str, needle: &str, n: usize, message: String) -> SceneError {
+    match line_of(text, needle, n) {
         Some(line) => SceneError {
             file: origin.to_string(),
             line: Some(line),
@@ -262,23 +268,15 @@ impl Scene {
             let name = output.name();
             if !listed.insert(name) {
                 // Point at the second listing: the first is fine on its own.
-                let needle = format!("{name}(");
-                let second = text
-                    .match_indices(&needle)
-                    .nth(1)
-                    .map(|(at, _)| text[..at].matches('\n').count() + 1);
-                let message = format!(
-                    "{name} is listed twice in outputs; each output can be listed once (one {name} series per run)"
-                );
-                return Err(match second {
-                    Some(line) => SceneError {
-                        file: origin.to_string(),
-                        line: Some(line),
-                        column: None,
-                        message,
-                    },
-                    None => SceneError::file(origin, message),
-                });
+                return Err(near_nth(
+                    text,
+                    origin,
+                    &format!("{name}("),
+                    1,
+                    format!(
+                        "{name} is listed twice in outputs; each output can be listed once (one {name} series per run)"
+                    ),
+                ));
             }
             if let Err(e) = output.check_scene(self) {
                 return err(
