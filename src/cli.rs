@@ -411,10 +411,7 @@ fn impact_line(summary: &Summary) -> Option<String> {
         ),
         _ => format!(
             "impact: NOT at rest, no final depth or stopping time: {} (depth so far {:.4} m; {contact})",
-            m.not_at_rest
-                .as_deref()
-                .unwrap_or("not at rest")
-                .trim_start_matches("not at rest: "),
+            m.not_at_rest.as_deref().unwrap_or_default(),
             m.depth_at_end
         ),
     })

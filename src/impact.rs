@@ -140,7 +140,7 @@ pub fn analyse(
         contact_gap: contact.lowest - surface,
         impact_energy: 0.5 * mass * v0 * v0,
         at_rest,
-        not_at_rest: (!at_rest).then(|| format!("not at rest: {}", why.join("; "))),
+        not_at_rest: (!at_rest).then(|| why.join("; ")),
         final_depth: at_rest.then_some(depth),
         stopping_time: at_rest.then_some(stopping),
         depth_at_end: depth,

@@ -303,8 +303,8 @@ pub fn load_run(dir: &Path, body: &str) -> Result<PonceletRun, String> {
     let impact = &summary["impact"];
     if impact["at_rest"] == false {
         return Err(format!(
-            "{label}: the intruder is {}; a Poncelet fit needs runs that end at rest (rerun with a later time.end)",
-            impact["not_at_rest"].as_str().unwrap_or("not at rest")
+            "{label}: the intruder is not at rest ({}); a Poncelet fit needs runs that end at rest (rerun with a later time.end)",
+            impact["not_at_rest"].as_str().unwrap_or_default()
         ));
     }
     let contact = impact["contact_time"].as_f64().unwrap_or(0.0);

@@ -131,11 +131,13 @@ fn run_to_end(
                 return Ok(Ending::Fault(f));
             }
             progress.step(sim.clock());
-            let stop = STOP.load(Ordering::SeqCst) && !sim.finished();
+            if sim.finished() {
+                break;
+            }
+            let stop = STOP.load(Ordering::SeqCst);
             let due = checkpoints
                 .0
-                .is_some_and(|every| sim.clock().step.is_multiple_of(every))
-                && !sim.finished();
+                .is_some_and(|every| sim.clock().step.is_multiple_of(every));
             if stop || due {
                 Checkpoint::capture(&mut sim, scene, from.file, from.overrides)
                     .write(&out.join("checkpoint.bin"))
