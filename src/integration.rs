@@ -1,7 +1,8 @@
 //! Shape-function schemes: how a material point's node weights and weight gradients are made.
 //!
-//! The schemes differ only here; the step is the same for all (SCIENCE.md 3). Both built-in
-//! schemes are tensor products of a 1D rule on the bilinear hat `N(x) = max(0, 1 - |x|/h)`:
+//! The schemes differ only here; the step is the same for all (SCIENCE.md 3). Every
+//! built-in scheme is a tensor product of a 1D rule; two are built on the bilinear hat
+//! `N(x) = max(0, 1 - |x|/h)`:
 //!
 //! * `Linear`: `S_i = N_i(x_p)` (standard MPM, two nodes per axis).
 //! * `CpdiFixed`: the paper's fixed-extent CPDI (uGIMP-like). The point owns a square of
@@ -9,6 +10,12 @@
 //!   gradient is the corner difference over the extent. Because the corner box is
 //!   axis-aligned, the four-corner average factorises into a product of two 1D averages,
 //!   which is what is computed (three nodes per axis when `a <= h/2`).
+//! * `QuadraticBspline`: the quadratic B-spline centred on each node (three nodes per axis,
+//!   weights and gradients continuous everywhere, independent of the point's extent). It is
+//!   here as the dense-flow comparison of docs/numerics.md ("Quadratic B-splines"), not as
+//!   the paper's scheme. Past a non-periodic edge the third node does not exist; its weight
+//!   and gradient are folded onto the edge node, which keeps the weights a partition of
+//!   unity (not linearly complete within half a cell of the edge).
 //!
 //! Near a non-periodic domain edge a CPDI extent is clipped to the grid: the 1D rule then
 //! averages over `[max(x - a, 0), min(x + a, L)]` and divides by that clipped width. Weights
@@ -53,12 +60,16 @@ pub enum Integration {
     /// The paper's fixed-extent CPDI (uGIMP-like) integration.
     #[default]
     CpdiFixed,
+    /// Quadratic B-spline weights (C1 across cells, three nodes per axis).
+    QuadraticBspline,
 }
 
 /// Standard MPM weights.
 pub struct Linear;
 /// Fixed-extent CPDI weights.
 pub struct CpdiFixed;
+/// Quadratic B-spline weights.
+pub struct QuadraticBspline;
 
 #[inline]
 fn hat(x: f64) -> f64 {
@@ -117,6 +128,43 @@ impl Scheme for CpdiFixed {
             let (nl, nh) = (hat(lo - node), hat(hi - node));
             w[k] = 0.5 * (nl + nh);
             dw[k] = (nh - nl) * inv_width;
+        }
+        AxisWeights {
+            base: base as isize,
+            w,
+            dw,
+        }
+    }
+}
+
+impl Scheme for QuadraticBspline {
+    const NAME: &'static str = "QuadraticBspline";
+    #[inline]
+    fn axis(xi: f64, _alpha: f64, cells: usize, periodic: bool) -> AxisWeights {
+        let n = cells as f64;
+        let xi = if periodic { xi } else { xi.clamp(0.0, n) };
+        let base = fast_floor(xi - 0.5);
+        let f = xi - base;
+        let mut w = [
+            0.5 * (1.5 - f) * (1.5 - f),
+            0.75 - (f - 1.0) * (f - 1.0),
+            0.5 * (f - 0.5) * (f - 0.5),
+        ];
+        let mut dw = [f - 1.5, -2.0 * (f - 1.0), f - 0.5];
+        if !periodic {
+            // A node past the edge folds onto the edge node.
+            if base < 0.0 {
+                w[1] += w[0];
+                dw[1] += dw[0];
+                w[0] = 0.0;
+                dw[0] = 0.0;
+            }
+            if base + 2.0 > n {
+                w[1] += w[2];
+                dw[1] += dw[2];
+                w[2] = 0.0;
+                dw[2] = 0.0;
+            }
         }
         AxisWeights {
             base: base as isize,

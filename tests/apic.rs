@@ -16,7 +16,7 @@ use common::Rng;
 use regolith::Simulation;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::integration::{CpdiFixed, Footprint, Linear, Scheme};
+use regolith::integration::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 use regolith::plugin::parse_scene;
 use regolith::step::transfer::apic_gather;
 
@@ -82,6 +82,7 @@ fn affine_field_comes_back<S: Scheme>() {
 fn an_affine_field_comes_back_exactly() {
     affine_field_comes_back::<CpdiFixed>();
     affine_field_comes_back::<Linear>();
+    affine_field_comes_back::<QuadraticBspline>();
 }
 
 /// `m (x x v + (C D)_yx - (C D)_xy)`: a point's APIC angular momentum (z component).
@@ -127,6 +128,7 @@ fn gather_keeps_angular_momentum<S: Scheme>() {
 fn the_gather_conserves_angular_momentum() {
     gather_keeps_angular_momentum::<CpdiFixed>();
     gather_keeps_angular_momentum::<Linear>();
+    gather_keeps_angular_momentum::<QuadraticBspline>();
 }
 
 /// A stress-free body without gravity on the test grid, with the APIC transfer.
@@ -161,7 +163,7 @@ fn grid_momentum(sim: &mut Simulation) -> DVec2 {
 /// scatter's, which must carry the points' momentum and APIC angular momentum.
 #[test]
 fn the_scatter_conserves_momentum_and_angular_momentum() {
-    for integration in ["CpdiFixed", "Linear"] {
+    for integration in ["CpdiFixed", "Linear", "QuadraticBspline"] {
         let mut sim = scatter_scene(integration, "Disc(centre: (0.2, 0.5), radius: 0.25)");
         let grid = sim.grid().clone();
         let mut rng = Rng(0xdead_beef_cafe_f00d);
@@ -174,6 +176,9 @@ fn the_scatter_conserves_momentum_and_angular_momentum() {
                 let (x, m, v, c) = (p.position[k], p.mass[k], p.velocity[k], p.affine[k]);
                 let f = match integration {
                     "Linear" => Footprint::new::<Linear>(&grid, x, p.half_width[k]),
+                    "QuadraticBspline" => {
+                        Footprint::new::<QuadraticBspline>(&grid, x, p.half_width[k])
+                    }
                     _ => Footprint::new::<CpdiFixed>(&grid, x, p.half_width[k]),
                 };
                 momentum += m * v;
@@ -205,7 +210,7 @@ fn the_scatter_conserves_momentum_and_angular_momentum() {
 /// and the coarse impact's bed climbed its side walls until it blew up.)
 #[test]
 fn the_scatter_conserves_momentum_next_to_a_wall() {
-    for integration in ["CpdiFixed", "Linear"] {
+    for integration in ["CpdiFixed", "Linear", "QuadraticBspline"] {
         let mut sim = scatter_scene(integration, "Rectangle(min: (-0.3, 0.1), max: (-0.1, 0.3))");
         let mut rng = Rng(0x0123_4567_89ab_cdef);
         let mut momentum = DVec2::ZERO;

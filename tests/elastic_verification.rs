@@ -34,6 +34,13 @@ fn first_mode_period_within_one_percent_linear() {
 }
 
 #[test]
+fn first_mode_period_within_one_percent_bspline() {
+    let (measured, exact) = bar_period(&["integration=QuadraticBspline"]);
+    let err = (measured / exact - 1.0).abs();
+    assert!(err < 0.01, "period {measured} vs {exact} (error {err:.4})");
+}
+
+#[test]
 fn first_mode_period_within_one_percent_cpdi() {
     let (measured, exact) = bar_period(&["integration=CpdiFixed"]);
     let err = (measured / exact - 1.0).abs();

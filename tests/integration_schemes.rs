@@ -1,10 +1,10 @@
 //! Shape-function schemes: partition of unity, zero-sum gradients, linear completeness, and
-//! the documented clipping at the domain edge.
+//! the documented clipping at the domain edge (CPDI) and folding at it (B-spline).
 
 use proptest::prelude::*;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::integration::{CpdiFixed, Footprint, Linear, Scheme};
+use regolith::integration::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 
 fn grid(periodic: [bool; 2]) -> GridGeometry {
     GridGeometry {
@@ -79,7 +79,7 @@ fn check_completeness<S: Scheme>(g: &GridGeometry, x: DVec2, a: f64) -> Result<(
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(5000))]
 
-    /// Away from the edges both schemes are a partition of unity with zero-sum gradients and
+    /// Away from the edges every scheme is a partition of unity with zero-sum gradients and
     /// reproduce linear fields: sum S x_i = x_p and sum x_i (outer) grad S = 1.
     #[test]
     fn interior_points_are_complete(fx in 0.0f64..1.0, fy in 0.0f64..1.0, ppc in 1usize..6) {
@@ -89,6 +89,7 @@ proptest! {
         let x = g.origin + DVec2::new(0.06 + fx * 0.88, 0.06 + fy * 0.48);
         check_completeness::<Linear>(&g, x, a)?;
         check_completeness::<CpdiFixed>(&g, x, a)?;
+        check_completeness::<QuadraticBspline>(&g, x, a)?;
     }
 
     /// On periodic axes the same holds everywhere, the wrapped nodes standing in for the
@@ -97,7 +98,11 @@ proptest! {
     fn periodic_points_are_a_partition_of_unity(fx in 0.0f64..1.0, fy in 0.0f64..1.0) {
         let g = grid([true, true]);
         let x = g.origin + DVec2::new(fx, fy) * g.size();
-        for s in [sums::<Linear>(&g, x, 0.0125), sums::<CpdiFixed>(&g, x, 0.0125)] {
+        for s in [
+            sums::<Linear>(&g, x, 0.0125),
+            sums::<CpdiFixed>(&g, x, 0.0125),
+            sums::<QuadraticBspline>(&g, x, 0.0125),
+        ] {
             prop_assert!((s.weight - 1.0).abs() < 1e-14);
             prop_assert!(s.gradient.length() < 1e-12);
         }
@@ -128,19 +133,39 @@ proptest! {
         let l = sums::<Linear>(&g, x, a);
         prop_assert!((l.weight - 1.0).abs() < 1e-14 && (l.position - x).length() < 1e-14);
     }
+
+    /// Within half a cell of a non-periodic edge a B-spline point's third node would lie
+    /// past the edge; its weight is folded onto the edge node, so the weights still sum to
+    /// one and the gradients to zero.
+    #[test]
+    fn folded_bspline_weights_keep_unity(fx in 0.0f64..1.0, side in 0usize..4) {
+        let g = grid([false, false]);
+        let (lo, hi) = (g.origin, g.max());
+        let depth = fx * 0.5 * g.cell_size;
+        let x = match side {
+            0 => DVec2::new(lo.x + depth, lo.y + 0.1 + fx * 0.3),
+            1 => DVec2::new(hi.x - depth, lo.y + 0.1 + fx * 0.3),
+            2 => DVec2::new(lo.x + 0.1 + fx * 0.7, lo.y + depth),
+            _ => DVec2::new(lo.x + 0.1 + fx * 0.7, hi.y - depth),
+        };
+        let s = sums::<QuadraticBspline>(&g, x, 0.0);
+        prop_assert!((s.weight - 1.0).abs() < 1e-14, "sum S = {}", s.weight);
+        prop_assert!(s.gradient.length() < 1e-12, "sum grad S = {}", s.gradient);
+    }
 }
 
-/// CPDI's gradient is continuous across a node (the point of the scheme); linear's jumps.
+/// CPDI's and the B-spline's gradients are continuous across a node (the point of both
+/// schemes); linear's jumps.
 #[test]
 fn cpdi_gradient_is_continuous_across_a_node() {
     let g = grid([false, false]);
     let node = g.node_position(8, 5);
     let eps = 1e-9;
-    let grad_of = |x: DVec2, cpdi: bool| {
-        let st = if cpdi {
-            Footprint::new::<CpdiFixed>(&g, x, 0.0125)
-        } else {
-            Footprint::new::<Linear>(&g, x, 0.0125)
+    let grad_of = |x: DVec2, scheme: &str| {
+        let st = match scheme {
+            "CpdiFixed" => Footprint::new::<CpdiFixed>(&g, x, 0.0125),
+            "QuadraticBspline" => Footprint::new::<QuadraticBspline>(&g, x, 0.0125),
+            _ => Footprint::new::<Linear>(&g, x, 0.0125),
         };
         st.iter()
             .find(|(n, _, _)| *n == g.index(8, 5))
@@ -148,8 +173,19 @@ fn cpdi_gradient_is_continuous_across_a_node() {
             .unwrap_or(0.0)
     };
     let at = |dx: f64| node + DVec2::new(dx, 0.013);
-    let cpdi_jump = (grad_of(at(eps), true) - grad_of(at(-eps), true)).abs();
-    let linear_jump = (grad_of(at(eps), false) - grad_of(at(-eps), false)).abs();
+    let jump = |scheme| (grad_of(at(eps), scheme) - grad_of(at(-eps), scheme)).abs();
+    let (cpdi_jump, linear_jump) = (jump("CpdiFixed"), jump("Linear"));
+    // Across a cell's midpoint, where the B-spline changes its nodes, too.
+    let mid = |dx: f64| node + DVec2::new(0.5 * g.cell_size + dx, 0.013);
+    let bspline_jump = (grad_of(at(eps), "QuadraticBspline")
+        - grad_of(at(-eps), "QuadraticBspline"))
+    .abs()
+    .max((grad_of(mid(eps), "QuadraticBspline") - grad_of(mid(-eps), "QuadraticBspline")).abs());
+    // Its second derivative is bounded by 2/h^2 = 800 /m^2 per axis: ~2e-6 across 2e-9 m.
+    assert!(
+        bspline_jump < 1e-4,
+        "B-spline gradient jumps by {bspline_jump}"
+    );
     // Continuous: across 2e-9 m the CPDI gradient changes by its slope (~1/(2 a h^2) =
     // 1.6e4 /m^2) times the distance, ~3e-5; the linear one jumps by 2/h = 40 /m.
     assert!(cpdi_jump < 1e-4, "CPDI gradient jumps by {cpdi_jump}");
@@ -172,7 +208,11 @@ proptest! {
         let x = g.origin + DVec2::new(fx, fy) * g.size();
         let nx = g.nodes_along(0);
         let row = (g.cell_of(x) / g.cells[0]) as isize;
-        for f in [Footprint::new::<Linear>(&g, x, a), Footprint::new::<CpdiFixed>(&g, x, a)] {
+        for f in [
+            Footprint::new::<Linear>(&g, x, a),
+            Footprint::new::<CpdiFixed>(&g, x, a),
+            Footprint::new::<QuadraticBspline>(&g, x, a),
+        ] {
             for (n, w, grad) in f.iter() {
                 prop_assert!(n < g.node_count(), "node {n} off the grid");
                 let r = (n / nx) as isize;

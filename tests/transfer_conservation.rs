@@ -70,9 +70,23 @@ fn scramble(sim: &mut Simulation) {
     }
 }
 
+/// The relative tolerance of an identity that holds to `exact` for the bilinear schemes. A
+/// quadratic B-spline node at the far edge of a point's support has weight `(f - 1/2)^2 / 2`
+/// but gradient `(f - 1/2) / h`: jittered points make such nodes fall below the grid's mass
+/// tolerance (1e-8 relative), whose internal force the grid update drops (docs/numerics.md,
+/// "Nodes below the mass tolerance"), and the dropped force scales as the square root of the
+/// node's weight, not as the weight. Measured here: 2.6e-8 of the power scale, 1.3e-11 of the momentum.
+fn round_off(integration: &str, exact: f64) -> f64 {
+    if integration == "QuadraticBspline" {
+        1e-6
+    } else {
+        exact
+    }
+}
+
 #[test]
 fn internal_force_power_equals_stress_power() {
-    for integration in ["Linear", "CpdiFixed"] {
+    for integration in ["Linear", "CpdiFixed", "QuadraticBspline"] {
         for dilatation in ["PerPoint", "CellAveraged"] {
             let mut sim = Simulation::new(&scene(integration, "Usl", "Flip", dilatation));
             scramble(&mut sim);
@@ -96,7 +110,7 @@ fn internal_force_power_equals_stress_power() {
             }
             let tag = format!("{integration} {dilatation}");
             assert!(
-                (nodal - points).abs() < 1e-11 * scale,
+                (nodal - points).abs() < round_off(integration, 1e-11) * scale,
                 "{tag}: nodal power {nodal:e} vs stress power {points:e} (scale {scale:e})"
             );
         }
@@ -105,7 +119,7 @@ fn internal_force_power_equals_stress_power() {
 
 #[test]
 fn one_step_conserves_mass_and_momentum() {
-    for integration in ["Linear", "CpdiFixed"] {
+    for integration in ["Linear", "CpdiFixed", "QuadraticBspline"] {
         for update in ["Usl", "Musl"] {
             for transfer in [
                 "Flip, flip: 0.0",
@@ -127,7 +141,7 @@ fn one_step_conserves_mass_and_momentum() {
                 );
                 let drift = (after.0 - before.0).length();
                 assert!(
-                    drift < 1e-13 * before.1,
+                    drift < round_off(integration, 1e-13) * before.1,
                     "{tag}: momentum drift {drift:e} of {:e}",
                     before.1
                 );

@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel};
 
-use crate::integration::{CpdiFixed, Integration, Linear, Scheme};
+use crate::integration::{CpdiFixed, Integration, Linear, QuadraticBspline, Scheme};
 use crate::scene::{Dilatation, StressUpdate, Transfer};
 use crate::sim::Clock;
 
@@ -162,6 +162,7 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
     match options.integration {
         Integration::Linear => add_transfers::<Linear>(&mut schedule, options),
         Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, options),
+        Integration::QuadraticBspline => add_transfers::<QuadraticBspline>(&mut schedule, options),
     }
     let gradient_done = StepSet::GridToParticle;
     match options.dilatation {
