@@ -78,7 +78,8 @@ enum Command {
         jobs: Option<u64>,
     },
     /// Fit the Poncelet drag law m z'' = m g - f(z) - h(z) z'^2 across runs of one shape at
-    /// several speeds (the paper's section 4.2), writing depth,f,h,runs,residual as CSV.
+    /// three or more speeds (the paper's section 4.2), writing
+    /// depth,f,h,runs,residual,f_error,h_error,condition as CSV.
     Fit {
         /// Run directories, or sweep output directories (all their runs).
         #[arg(required = true)]
@@ -90,7 +91,8 @@ enum Command {
         /// of the shallowest depth the runs reach while descending).
         #[arg(long, value_name = "START:STOP:COUNT")]
         depths: Option<String>,
-        /// Output CSV (default: poncelet.csv in the first directory).
+        /// Output CSV (default: poncelet.csv in the sweep directory when the first argument
+        /// is one, else beside the first run directory).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Take z' and z'' from a least-squares parabola over this window (s) around each
@@ -542,22 +544,27 @@ fn fit(
     out: Option<PathBuf>,
     window: Option<f64>,
 ) -> Result<(), Error> {
-    use crate::poncelet::{Derivatives, default_depths, expand_dirs, fit, load_run, to_csv};
+    use crate::poncelet::{
+        Derivatives, MIN_SPEEDS, default_depths, default_table, expand_dirs, fit, load_run,
+        refuse_duplicates, to_csv,
+    };
     let fail = |m: String| Error::Scene(SceneError::file("regolith fit", m));
     let how = match window {
         None => Derivatives::Spline,
         Some(w) if w.is_finite() && w > 0.0 => Derivatives::Window(w),
         Some(w) => return Err(fail(format!("--window must be a positive time, got {w}"))),
     };
+    let table = out.unwrap_or_else(|| default_table(&dirs[0]));
     let dirs = expand_dirs(dirs).map_err(fail)?;
     let runs = dirs
         .iter()
         .map(|d| load_run(d, body))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
-    if runs.len() < 2 {
+    refuse_duplicates(&dirs, &runs).map_err(fail)?;
+    if runs.len() < MIN_SPEEDS {
         return Err(fail(format!(
-            "the fit needs runs at two or more speeds, got {}",
+            "the fit needs runs at {MIN_SPEEDS} or more speeds (two unknowns per depth; with two speeds the line fits exactly and nothing checks the law), got {} run(s)",
             runs.len()
         )));
     }
@@ -566,7 +573,13 @@ fn fit(
         None => default_depths(&runs),
     };
     let points = fit(&runs, &depths, how);
-    let out = out.unwrap_or_else(|| dirs[0].join("poncelet.csv"));
+    if points.is_empty() {
+        return Err(fail(format!(
+            "none of the {} depths is reached while descending by runs at {MIN_SPEEDS} or more distinct speeds; nothing written",
+            depths.len()
+        )));
+    }
+    let out = table;
     crate::output::write_atomic(&out, to_csv(&points).as_bytes())
         .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;
     println!(

@@ -133,6 +133,8 @@ pub struct PonceletRun {
     pub t: Vec<f64>,
     /// Depth below the position at first contact (m, positive down).
     pub z: Vec<f64>,
+    /// The run's `state_hash` (summary.json), which tells the same run given twice.
+    pub state_hash: Option<String>,
 }
 
 impl PonceletRun {
@@ -172,7 +174,19 @@ pub struct PonceletPoint {
     pub runs: usize,
     /// Root mean square of `f + h z'^2 - m (g - z'')` over those runs (N/m).
     pub residual: f64,
+    /// Standard errors of `f` and `h` from the residual (`n - 2` degrees of freedom).
+    pub f_error: f64,
+    pub h_error: f64,
+    /// Condition number of the least-squares problem (its columns `1` and `z'^2` scaled to
+    /// unit length): large when the speeds at this depth hardly differ.
+    pub condition: f64,
 }
+
+/// Distinct speeds a depth needs before it is fitted. Two unknowns per depth: with two
+/// speeds the line passes exactly through both points, the residual is zero whatever the
+/// data, and nothing checks that they follow the law (f and h may come out negative); a
+/// third speed leaves one degree of freedom to measure the misfit.
+pub const MIN_SPEEDS: usize = 3;
 
 /// How the velocity and acceleration at `t_k` are taken from a run's depth samples.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -233,7 +247,7 @@ fn local_parabola(t: &[f64], z: &[f64], tk: f64, half: f64) -> Option<(f64, f64)
 }
 
 /// Fits `f` and `h` at each of `depths` from `runs`; a depth reached (while descending) by
-/// fewer than two runs with distinct speeds is left out.
+/// runs at fewer than [`MIN_SPEEDS`] distinct speeds is left out.
 pub fn fit(runs: &[PonceletRun], depths: &[f64], how: Derivatives) -> Vec<PonceletPoint> {
     let splines: Vec<_> = runs
         .iter()
@@ -261,24 +275,46 @@ pub fn fit(runs: &[PonceletRun], depths: &[f64], how: Derivatives) -> Vec<Poncel
                 Some((v * v, r.mass * (r.gravity - a)))
             })
             .collect();
-        let Some((f, h)) = line_fit(&rows) else {
+        if distinct_speeds(&rows) < MIN_SPEEDS {
             continue;
-        };
-        let residual = (rows
-            .iter()
-            .map(|(v2, b)| (f + h * v2 - b).powi(2))
-            .sum::<f64>()
-            / rows.len() as f64)
-            .sqrt();
-        out.push(PonceletPoint {
-            depth: zk,
-            f,
-            h,
-            runs: rows.len(),
-            residual,
-        });
+        }
+        if let Some(point) = fit_depth(zk, &rows) {
+            out.push(point);
+        }
     }
     out
+}
+
+/// Number of distinct `v^2` among the rows (equal to 1e-9 of the largest counts once).
+fn distinct_speeds(rows: &[(f64, f64)]) -> usize {
+    let mut v2: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    v2.sort_by(f64::total_cmp);
+    let scale = v2.last().copied().unwrap_or(0.0).abs();
+    v2.windows(2).filter(|w| w[1] - w[0] > 1e-9 * scale).count() + usize::from(!v2.is_empty())
+}
+
+/// The least-squares line `m (g - z'') = f + h v^2` through one depth's rows, with its
+/// uncertainty.
+fn fit_depth(depth: f64, rows: &[(f64, f64)]) -> Option<PonceletPoint> {
+    let (f, h) = line_fit(rows)?;
+    let n = rows.len() as f64;
+    let squares: f64 = rows.iter().map(|(v2, b)| (f + h * v2 - b).powi(2)).sum();
+    let mean = rows.iter().map(|r| r.0).sum::<f64>() / n;
+    let sxx: f64 = rows.iter().map(|r| (r.0 - mean).powi(2)).sum();
+    let variance = squares / (n - 2.0);
+    // Columns 1 and v^2 scaled to unit length have Gram matrix [[1, c], [c, 1]].
+    let c = rows.iter().map(|r| r.0).sum::<f64>()
+        / (n.sqrt() * rows.iter().map(|r| r.0 * r.0).sum::<f64>().sqrt());
+    Some(PonceletPoint {
+        depth,
+        f,
+        h,
+        runs: rows.len(),
+        residual: (squares / n).sqrt(),
+        f_error: (variance * (1.0 / n + mean * mean / sxx)).sqrt(),
+        h_error: (variance / sxx).sqrt(),
+        condition: ((1.0 + c) / (1.0 - c).max(f64::MIN_POSITIVE)).sqrt(),
+    })
 }
 
 /// Reads a run directory (`summary.json` and `trajectory.csv`) for the fit of `body`.
@@ -342,7 +378,45 @@ pub fn load_run(dir: &Path, body: &str) -> Result<PonceletRun, String> {
         gravity,
         t,
         z: y.iter().map(|y| y0 - y).collect(),
+        state_hash: summary["state_hash"].as_str().map(str::to_string),
     })
+}
+
+/// Refuses a run given twice: the same directory twice, or two directories holding the same
+/// run (equal `state_hash`). A duplicate would count as a second speed where there is one.
+pub fn refuse_duplicates(dirs: &[PathBuf], runs: &[PonceletRun]) -> Result<(), String> {
+    let canonical: Vec<PathBuf> = dirs
+        .iter()
+        .map(|d| d.canonicalize().unwrap_or_else(|_| d.clone()))
+        .collect();
+    for (b, run) in runs.iter().enumerate() {
+        for a in 0..b {
+            if canonical[a] == canonical[b] {
+                return Err(format!("{} is given twice", run.label));
+            }
+            if let (Some(x), Some(y)) = (&runs[a].state_hash, &run.state_hash)
+                && x == y
+            {
+                return Err(format!(
+                    "{} and {} are the same run (state_hash {x}); give each run once",
+                    runs[a].label, run.label
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where `regolith fit` writes by default: in the sweep directory when the first argument
+/// is one, else beside the first run directory (never inside a run's own record).
+pub fn default_table(first: &Path) -> PathBuf {
+    if first.join("sweep.csv").is_file() {
+        return first.join("poncelet.csv");
+    }
+    match first.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.join("poncelet.csv"),
+        _ => PathBuf::from("poncelet.csv"),
+    }
 }
 
 /// Run directories named on the command line: a sweep's output directory (it has a
@@ -365,13 +439,13 @@ pub fn expand_dirs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     Ok(out)
 }
 
-/// The fit as CSV: `depth,f,h,runs,residual`.
+/// The fit as CSV: `depth,f,h,runs,residual,f_error,h_error,condition`.
 pub fn to_csv(points: &[PonceletPoint]) -> String {
-    let mut s = String::from("depth,f,h,runs,residual\n");
+    let mut s = String::from("depth,f,h,runs,residual,f_error,h_error,condition\n");
     for p in points {
         s.push_str(&format!(
-            "{:e},{:e},{:e},{},{:e}\n",
-            p.depth, p.f, p.h, p.runs, p.residual
+            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e}\n",
+            p.depth, p.f, p.h, p.runs, p.residual, p.f_error, p.h_error, p.condition
         ));
     }
     s

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use regolith::poncelet::{Derivatives, default_depths, fit, load_run};
+use regolith::poncelet::{Derivatives, default_depths, fit, load_run, refuse_duplicates};
 
 const MASS: f64 = 73.0;
 const G: f64 = 9.81;
@@ -144,4 +144,78 @@ fn a_run_that_failed_is_refused() {
     std::fs::write(dir.join("summary.json"), r#"{"status": "failed"}"#).unwrap();
     let e = load_run(&dir, "intruder").unwrap_err();
     assert!(e.contains("did not complete"), "{e}");
+}
+
+/// Runs at `speeds`, loaded.
+fn runs_at(root: &Path, speeds: &[f64]) -> Vec<regolith::poncelet::PonceletRun> {
+    speeds
+        .iter()
+        .enumerate()
+        .map(|(k, &v0)| {
+            let dir = root.join(format!("run{k}"));
+            write_run(&dir, v0);
+            load_run(&dir, "intruder").unwrap()
+        })
+        .collect()
+}
+
+/// Two speeds determine the two unknowns exactly (zero residual, whatever the data), so no
+/// depth is fitted; a third speed is fitted, with standard errors and a condition number.
+#[test]
+fn a_depth_needs_three_speeds_and_reports_its_uncertainty() {
+    let root = tempfile::tempdir().unwrap();
+    let two = runs_at(root.path(), &[2.0, 4.0]);
+    let depths = default_depths(&two);
+    assert!(fit(&two, &depths, Derivatives::Spline).is_empty());
+    let root = tempfile::tempdir().unwrap();
+    let three = runs_at(root.path(), &[2.0, 3.0, 4.0]);
+    let points = fit(&three, &default_depths(&three), Derivatives::Spline);
+    assert_eq!(points.len(), 20);
+    for p in &points {
+        let f = f_true(p.depth).max(100.0);
+        assert_eq!(p.runs, 3);
+        // Data that follow the law: errors far below the values, and the condition of a
+        // fit whose speeds span a factor two at most a few tens.
+        assert!(
+            p.f_error < 0.01 * f && p.h_error < 0.01 * h_true(p.depth),
+            "{p:?}"
+        );
+        assert!(
+            p.condition.is_finite() && p.condition > 1.0 && p.condition < 100.0,
+            "{p:?}"
+        );
+    }
+    // Speeds close together: the problem is ill-conditioned and says so.
+    let root = tempfile::tempdir().unwrap();
+    let close = runs_at(root.path(), &[3.0, 3.01, 3.02]);
+    let near = fit(&close, &default_depths(&close), Derivatives::Spline);
+    assert!(
+        near.iter()
+            .all(|p| p.condition > 10.0 * points[0].condition),
+        "{:?} vs {:?}",
+        near.first(),
+        points.first()
+    );
+}
+
+/// The same run twice (one directory given twice, or two copies of one run) is refused: it
+/// would count as a second speed.
+#[test]
+fn a_run_given_twice_is_refused() {
+    let root = tempfile::tempdir().unwrap();
+    let (a, b) = (root.path().join("a"), root.path().join("b"));
+    write_run(&a, 3.0);
+    write_run(&b, 3.0);
+    let hashed = |dir: &Path| {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        let text = text.replacen('{', r#"{"state_hash": "00ff", "#, 1);
+        std::fs::write(dir.join("summary.json"), text).unwrap();
+    };
+    hashed(&a);
+    hashed(&b);
+    let load = |d: &Path| load_run(d, "intruder").unwrap();
+    let e = refuse_duplicates(&[a.clone(), a.clone()], &[load(&a), load(&a)]).unwrap_err();
+    assert!(e.contains("given twice"), "{e}");
+    let e = refuse_duplicates(&[a.clone(), b.clone()], &[load(&a), load(&b)]).unwrap_err();
+    assert!(e.contains("same run") && e.contains("00ff"), "{e}");
 }

@@ -303,8 +303,8 @@ fn recording_options_without_a_recording_are_an_error() {
 #[test]
 fn fit_writes_a_table_or_says_why_not() {
     let dir = tempfile::tempdir().unwrap();
-    // Two synthetic runs of a constant deceleration (f only, h = 0): z = v0 t - a t^2 / 2.
-    for (k, v0) in [2.0f64, 4.0].iter().enumerate() {
+    // Three synthetic runs of a constant deceleration (f only, h = 0): z = v0 t - a t^2 / 2.
+    for (k, v0) in [2.0f64, 3.0, 4.0].iter().enumerate() {
         let run = dir.path().join(format!("run{k}"));
         std::fs::create_dir_all(&run).unwrap();
         let a = 20.0;
@@ -323,30 +323,57 @@ fn fit_writes_a_table_or_says_why_not() {
         )
         .unwrap();
     }
-    let table = dir.path().join("f.csv");
+    let run = |k: usize| dir.path().join(format!("run{k}"));
+    let arg = |p: &Path| p.to_str().unwrap().to_string();
     let o = regolith(&[
         "fit",
-        dir.path().join("run0").to_str().unwrap(),
-        dir.path().join("run1").to_str().unwrap(),
+        &arg(&run(0)),
+        &arg(&run(1)),
+        &arg(&run(2)),
         "--depths",
         "0.01:0.08:8",
-        "--out",
-        table.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Written beside the runs, not into the first run's own record.
+    let table = dir.path().join("poncelet.csv");
+    assert!(!run(0).join("poncelet.csv").exists());
     let text = std::fs::read_to_string(&table).unwrap();
     let rows: Vec<&str> = text.lines().collect();
-    assert_eq!(rows[0], "depth,f,h,runs,residual");
+    assert_eq!(rows[0], "depth,f,h,runs,residual,f_error,h_error,condition");
     assert_eq!(rows.len(), 9, "{text}");
     // m (g - z'') = m (g + a) everywhere: f = 2 x 29.81, h = 0.
     for row in &rows[1..] {
         let v: Vec<f64> = row.split(',').map(|c| c.parse().unwrap()).collect();
         assert!((v[1] - 59.62).abs() < 0.05 && v[2].abs() < 0.01, "{row}");
     }
-    let o = regolith(&["fit", dir.path().join("run0").to_str().unwrap()]);
-    assert!(!o.status.success());
+    // Two runs determine f and h exactly: refused, in one line.
+    let o = regolith(&["fit", &arg(&run(0)), &arg(&run(1))]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("two or more speeds"), "{err}");
+    assert!(
+        !o.status.success() && err.contains("3 or more speeds") && err.lines().count() == 1,
+        "{err}"
+    );
+    // The same run twice.
+    let o = regolith(&["fit", &arg(&run(0)), &arg(&run(1)), &arg(&run(0))]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("given twice"), "{err}");
+    // Depths no run reaches: nothing fitted is a failure, not an empty table.
+    let o = regolith(&[
+        "fit",
+        &arg(&run(0)),
+        &arg(&run(1)),
+        &arg(&run(2)),
+        "--depths",
+        "5:6:3",
+        "--out",
+        &arg(&dir.path().join("deep.csv")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("none of the 3 depths") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!dir.path().join("deep.csv").exists());
     let o = regolith(&["fit", "/nonexistent/run"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("summary.json"), "{err}");

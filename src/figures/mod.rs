@@ -196,8 +196,8 @@ pub fn make_figures(
     // Derivatives over an 18 ms window: the interpolating spline of the paper turns the
     // coarse grid's crossing pulses into noise (docs/VALIDATION.md).
     let terms = fit(&poncelet_runs, &depths, Derivatives::Window(0.018));
-    let f: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.f * THICKNESS)).collect();
-    let h: Vec<(f64, f64)> = terms.iter().map(|p| (p.depth, p.h * THICKNESS)).collect();
+    let f: Vec<_> = terms.iter().map(|p| (p.depth, p.f, p.f_error)).collect();
+    let h: Vec<_> = terms.iter().map(|p| (p.depth, p.h, p.h_error)).collect();
     draw(
         "poncelet_f.png",
         plot::curves(
@@ -205,11 +205,7 @@ pub fn make_figures(
             "Poncelet f(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 left); COARSE",
             "depth z (m)",
             "f over 3 mm (N)",
-            &[Series {
-                label: "f(z)".into(),
-                points: f,
-                hollow: false,
-            }],
+            &with_standard_error("f(z)", &f),
         ),
     )?;
     draw(
@@ -219,11 +215,7 @@ pub fn make_figures(
             "Poncelet h(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 right); COARSE",
             "depth z (m)",
             "h over 3 mm (kg/m)",
-            &[Series {
-                label: "h(z)".into(),
-                points: h,
-                hollow: false,
-            }],
+            &with_standard_error("h(z)", &h),
         ),
     )?;
     let diagram = read_space_time(&front_dir.join("pressure_front.csv"))?;
@@ -336,6 +328,34 @@ struct SpaceTime {
     times: Vec<f64>,
     radii: Vec<f64>,
     values: Vec<Vec<f64>>,
+}
+
+/// A fitted term per depth (`(depth, value, standard error)`, per metre of thickness) as
+/// three curves over the scene's thickness: the value and one standard error either side.
+fn with_standard_error(label: &str, terms: &[(f64, f64, f64)]) -> [Series; 3] {
+    let curve = |sign: f64| -> Vec<(f64, f64)> {
+        terms
+            .iter()
+            .map(|&(z, v, e)| (z, (v + sign * e) * THICKNESS))
+            .collect()
+    };
+    [
+        Series {
+            label: label.into(),
+            points: curve(0.0),
+            hollow: false,
+        },
+        Series {
+            label: "+1 standard error (fit residual)".into(),
+            points: curve(1.0),
+            hollow: true,
+        },
+        Series {
+            label: "-1 standard error".into(),
+            points: curve(-1.0),
+            hollow: true,
+        },
+    ]
 }
 
 /// `pressure_front.csv`: times, bin radii (from the `rR` headers) and the rows.
