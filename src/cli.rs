@@ -238,7 +238,11 @@ impl RecordArgs {
                     .to_string(),
             ));
         }
-        scene.add_output(&text, "command line", registries)?;
+        if scene.add_output(&text, "command line", registries)? {
+            eprintln!(
+                "note: the command line's recording replaces the scene's own {RECORDER}(..) output (one recording per run); only the command line's is written"
+            );
+        }
         Ok(())
     }
 }

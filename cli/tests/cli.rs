@@ -274,6 +274,46 @@ fn run_records_for_rerun_with_one_flag() {
     assert!(out.join("summary.json").exists() && out.join("trajectory.csv").exists());
 }
 
+/// A scene that lists its own `Rerun(..)` output, run with `--rrd`: one recording is made
+/// (the command line's), and the run says that it replaced the scene's.
+#[test]
+fn rrd_says_it_replaces_the_scenes_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let own = dir.path().join("own.rrd");
+    let text = std::fs::read_to_string(scene_path("impact_tipped_coarse"))
+        .unwrap()
+        .replace(
+            "outputs: [Impact(",
+            &format!(
+                "outputs: [Rerun(file: {:?}), Impact(",
+                own.display().to_string()
+            ),
+        );
+    let scene = dir.path().join("recorded.ron");
+    std::fs::write(&scene, text).unwrap();
+    let cli = dir.path().join("cli.rrd");
+    let o = regolith(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "domain.cells=(25, 25)",
+        "--set",
+        "time.end=0.002",
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+        "--rrd",
+        cli.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("replaces the scene's own Rerun(..) output"),
+        "{err}"
+    );
+    assert!(cli.exists() && !own.exists());
+}
+
 #[test]
 fn recording_options_without_a_recording_are_an_error() {
     let scene = scene_path("impact_tipped_coarse");

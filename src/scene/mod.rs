@@ -354,21 +354,24 @@ impl Scene {
 
     /// Adds an output written as scene text, e.g. `Rerun(file: "run.rrd")`, replacing any
     /// output of the same name the scene already lists (the command line's recording flags
-    /// use this). `origin` names where the text came from in error messages.
+    /// use this); returns whether it replaced one. `origin` names where the text came from
+    /// in error messages.
     pub fn add_output(
         &mut self,
         text: &str,
         origin: &str,
         registries: &Rc<Registries>,
-    ) -> Result<(), SceneError> {
+    ) -> Result<bool, SceneError> {
         let output: Named<dyn OutputSpec> =
             with_registries(registries, || ron_options().from_str(text))
                 .map_err(|e| SceneError::file(origin, format!("{} in `{text}`", e.code)))?;
         output
             .validate()
             .map_err(|e| SceneError::file(origin, format!("{}: {e}", output.name())))?;
+        let before = self.outputs.len();
         self.outputs.retain(|o| o.name() != output.name());
+        let replaced = self.outputs.len() < before;
         self.outputs.push(output);
-        Ok(())
+        Ok(replaced)
     }
 }
