@@ -365,14 +365,15 @@ fn fit_writes_a_table_or_says_why_not() {
     }
     let run = |k: usize| dir.path().join(format!("run{k}"));
     let arg = |p: &Path| p.to_str().unwrap().to_string();
-    let o = regolith(&[
-        "fit",
-        &arg(&run(0)),
-        &arg(&run(1)),
-        &arg(&run(2)),
-        "--depths",
-        "0.01:0.08:8",
-    ]);
+    // `regolith fit` on the three runs with `extra` arguments.
+    let fit_all = |extra: &[&str]| {
+        let runs: Vec<String> = (0..3).map(|k| arg(&run(k))).collect();
+        let mut args: Vec<&str> = vec!["fit"];
+        args.extend(runs.iter().map(String::as_str));
+        args.extend(extra);
+        regolith(&args)
+    };
+    let o = fit_all(&["--depths", "0.01:0.08:8"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // Written beside the runs, not into the first run's own record.
     let table = dir.path().join("poncelet.csv");
@@ -398,16 +399,8 @@ fn fit_writes_a_table_or_says_why_not() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("given twice"), "{err}");
     // Depths no run reaches: nothing fitted is a failure, not an empty table.
-    let o = regolith(&[
-        "fit",
-        &arg(&run(0)),
-        &arg(&run(1)),
-        &arg(&run(2)),
-        "--depths",
-        "5:6:3",
-        "--out",
-        &arg(&dir.path().join("deep.csv")),
-    ]);
+    let deep = arg(&dir.path().join("deep.csv"));
+    let o = fit_all(&["--depths", "5:6:3", "--out", &deep]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("none of the 3 depths") && err.lines().count() == 1,
