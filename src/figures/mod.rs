@@ -111,7 +111,7 @@ pub fn make_figures(
         written.push(path);
         Ok(())
     };
-    let impacts = read_impacts(&depth_dir)?;
+    let (impacts, moving) = read_impacts(&depth_dir)?;
     let cost = |rows: &[Impact]| rows.iter().map(|r| r.wall).sum::<f64>();
     let by_slope = |rows: &[Impact], f: fn(&Impact) -> f64| -> Vec<Series> {
         SLOPES
@@ -128,9 +128,10 @@ pub fn make_figures(
             .collect()
     };
     let coarse = format!(
-        "COARSE 50 x 50 cells, {} runs, {:.0} s of runs",
+        "COARSE 50 x 50 cells, {} runs, {:.0} s of runs{}",
         impacts.len(),
-        cost(&impacts)
+        cost(&impacts),
+        not_drawn(moving)
     );
     draw(
         "depth_energy.png",
@@ -152,7 +153,7 @@ pub fn make_figures(
             &by_slope(&impacts, |r| r.stopping),
         ),
     )?;
-    let rate = read_impacts(&rate_dir)?;
+    let (rate, rate_moving) = read_impacts(&rate_dir)?;
     let mu_i: Vec<(f64, f64)> = impacts
         .iter()
         .filter(|r| (r.slope - 1.5).abs() < 1e-9)
@@ -163,8 +164,9 @@ pub fn make_figures(
         plot::curves(
             &out.join("rate_independent.png"),
             &format!(
-                "mu(I) against rate-independent bed, s = 1.5 (paper Fig. 10); COARSE, {:.0} s",
-                cost(&rate)
+                "mu(I) against rate-independent bed, s = 1.5 (paper Fig. 10); COARSE, {:.0} s{}",
+                cost(&rate),
+                not_drawn(moving + rate_moving)
             ),
             "impact energy over 3 mm (J)",
             "final depth (m)",
@@ -238,11 +240,16 @@ pub fn make_figures(
         "flow_field.png",
         plot::arrows(
             &out.join("flow_field.png"),
-            "Bed velocity / disc speed at 45 ms (arrow: 0.15 D per unit), offsets in D (Fig. 6); COARSE",
+            "Bed velocity over the disc's speed at 45 ms, offsets in disc diameters D (paper Fig. 6); COARSE",
             ("x offset / D", "y offset / D"),
             &origins,
             &vectors,
             ((-1.5, 1.5), (-2.5, 0.5)),
+            &plot::ArrowKey {
+                disc: ((0.0, 0.0), 0.5),
+                length: FLOW_ARROW,
+                meaning: "disc speed".into(),
+            },
         ),
     )?;
     let mut panels = Vec::new();
@@ -264,6 +271,14 @@ pub fn make_figures(
     Ok(written)
 }
 
+/// The title's note of runs left out because their intruder was still moving at the end.
+fn not_drawn(moving: usize) -> String {
+    match moving {
+        0 => String::new(),
+        n => format!(", {n} not at rest (not drawn)"),
+    }
+}
+
 /// One impact run's measures.
 struct Impact {
     dir: PathBuf,
@@ -273,10 +288,13 @@ struct Impact {
     depth: f64,
     stopping: f64,
     wall: f64,
+    /// The intruder came to rest (`final_depth` and `stopping_time` are null otherwise).
+    at_rest: bool,
 }
 
-/// The completed runs of a sweep directory, with the slope read from their overrides.
-fn read_impacts(dir: &Path) -> Result<Vec<Impact>, Error> {
+/// The runs of a sweep directory whose intruder came to rest, with the slope read from their
+/// overrides, and how many were left out because it did not (their depth is not a result).
+fn read_impacts(dir: &Path) -> Result<(Vec<Impact>, usize), Error> {
     let dirs = crate::poncelet::expand_dirs(&[dir.to_path_buf()]).map_err(|e| fail("runs", e))?;
     let mut out = Vec::new();
     for d in dirs {
@@ -298,10 +316,14 @@ fn read_impacts(dir: &Path) -> Result<Vec<Impact>, Error> {
             depth: num(&s["impact"]["final_depth"]),
             stopping: num(&s["impact"]["stopping_time"]),
             wall: num(&s["wall_s"]),
+            at_rest: s["impact"]["at_rest"].as_bool() == Some(true),
             dir: d,
         });
     }
-    Ok(out)
+    let total = out.len();
+    out.retain(|r| r.at_rest);
+    let moving = total - out.len();
+    Ok((out, moving))
 }
 
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), Error> {
@@ -371,15 +393,18 @@ fn read_space_time(path: &Path) -> Result<SpaceTime, Error> {
     })
 }
 
+/// Length (in disc diameters) of the flow field's arrow for a point moving at the disc's speed.
+const FLOW_ARROW: f64 = 0.15;
+
 /// `flow_field_K.csv`: offsets and normalised velocities of every point (arrows scaled to
-/// show 0.15 D per unit of normalised velocity).
+/// [`FLOW_ARROW`] per unit of normalised velocity).
 fn read_flow(path: &Path) -> Result<(plot::Cloud, plot::Cloud), Error> {
     let (_, rows) = read_csv(path)?;
     let (mut o, mut v) = (Vec::new(), Vec::new());
     for r in &rows {
         if r.len() >= 7 && r[3].abs() < 1.5 && r[4] > -2.5 && r[4] < 0.5 {
             o.push((r[3], r[4]));
-            v.push((0.15 * r[5], 0.15 * r[6]));
+            v.push((FLOW_ARROW * r[5], FLOW_ARROW * r[6]));
         }
     }
     Ok((o, v))

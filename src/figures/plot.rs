@@ -93,15 +93,45 @@ where
     Ok(chart)
 }
 
-/// Draws the legend of the labelled series.
+/// The corner of the plot area holding the fewest of `points` (over `ranges`): where the
+/// legend covers the least data.
+fn emptiest_corner(points: &[(f64, f64)], ranges: ((f64, f64), (f64, f64))) -> SeriesLabelPosition {
+    let ((x0, x1), (y0, y1)) = ranges;
+    // A legend covers roughly the outer 40% of the width and 30% of the height.
+    let count = |right: bool, top: bool| {
+        points
+            .iter()
+            .filter(|&&(x, y)| {
+                let fx = (x - x0) / (x1 - x0);
+                let fy = (y - y0) / (y1 - y0);
+                (if right { fx > 0.6 } else { fx < 0.4 }) && (if top { fy > 0.7 } else { fy < 0.3 })
+            })
+            .count()
+    };
+    let corners = [
+        (SeriesLabelPosition::UpperRight, count(true, true)),
+        (SeriesLabelPosition::UpperLeft, count(false, true)),
+        (SeriesLabelPosition::LowerRight, count(true, false)),
+        (SeriesLabelPosition::LowerLeft, count(false, false)),
+    ];
+    corners
+        .into_iter()
+        .min_by_key(|c| c.1)
+        .map(|c| c.0)
+        .unwrap_or(SeriesLabelPosition::UpperRight)
+}
+
+/// Draws the legend of the labelled series at `position`.
 fn legend<'a, DB: DrawingBackend + 'a>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    position: SeriesLabelPosition,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     chart
         .configure_series_labels()
+        .position(position)
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
         .label_font(("sans-serif", 14))
@@ -122,6 +152,8 @@ pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> 
         true,
     );
     let mut chart = chart(&root, title, 18, (xs, ys), (x, y))?;
+    let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.clone()).collect();
+    let corner = emptiest_corner(&all, (xs, ys));
     for (k, s) in series.iter().enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
         let mut pts = s.points.clone();
@@ -149,7 +181,7 @@ pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> 
             }))
             .map_err(fail)?;
     }
-    legend(&mut chart)?;
+    legend(&mut chart, corner)?;
     root.present().map_err(fail)
 }
 
@@ -200,12 +232,22 @@ pub fn pareto(path: &Path, title: &str, points: &[Labelled]) -> Result<()> {
             )))
             .map_err(fail)?;
     }
-    legend(&mut chart)?;
+    legend(&mut chart, emptiest_corner(&xy, ranges))?;
     root.present().map_err(fail)
 }
 
-/// A heat map of `values[row][col]` over `times` (x) and `radii` (y), with the line
-/// `r = speed t` drawn over it.
+/// The heat map's colour at fraction `f` of its top: blue through green to red.
+fn heat(f: f64) -> RGBColor {
+    let f = f.clamp(0.0, 1.0);
+    RGBColor(
+        (255.0 * f) as u8,
+        (255.0 * (1.0 - (2.0 * f - 1.0).abs())) as u8,
+        (255.0 * (1.0 - f)) as u8,
+    )
+}
+
+/// A heat map of `values[row][col]` (Pa) over `times` (x) and `radii` (y), with the line
+/// `r = speed t` drawn over it and a colour bar beside it.
 pub fn space_time(
     path: &Path,
     title: &str,
@@ -214,8 +256,9 @@ pub fn space_time(
     values: &[Vec<f64>],
     speed: f64,
 ) -> Result<()> {
-    let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1000, 620)).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
+    let (main, side) = root.split_horizontally(860);
     let dt = times
         .windows(2)
         .map(|w| w[1] - w[0])
@@ -231,8 +274,9 @@ pub fn space_time(
         radii.last().copied().unwrap_or(1.0) + dr,
     );
     let ms = 1e3;
-    let axes = ("time (ms)", "distance from the impact point (m)");
-    let mut chart = chart(&root, title, 18, ((0.0, t1 * ms), (0.0, r1)), axes)?;
+    let x_axis = format!("time (ms); black line: p-wave speed sqrt(M/rho_c) = {speed:.0} m/s");
+    let axes = (x_axis.as_str(), "distance from the impact point (m)");
+    let mut chart = chart(&main, title, 17, ((0.0, t1 * ms), (0.0, r1)), axes)?;
     let top = values
         .iter()
         .flatten()
@@ -242,17 +286,11 @@ pub fn space_time(
     for (k, row) in values.iter().enumerate() {
         let t = times[k];
         for (b, &v) in row.iter().enumerate() {
-            let f = (v / top).clamp(0.0, 1.0);
-            let shade = RGBColor(
-                (255.0 * f) as u8,
-                (255.0 * (1.0 - (2.0 * f - 1.0).abs())) as u8,
-                (255.0 * (1.0 - f)) as u8,
-            );
             let (r0, r1) = (radii[b] - 0.5 * dr, radii[b] + 0.5 * dr);
             chart
                 .draw_series(std::iter::once(Rectangle::new(
                     [((t - 0.5 * dt) * ms, r0), ((t + 0.5 * dt) * ms, r1)],
-                    shade.filled(),
+                    heat(v / top).filled(),
                 )))
                 .map_err(fail)?;
         }
@@ -262,14 +300,57 @@ pub fn space_time(
             [(0.0, 0.0), (t1 * ms, speed * t1)],
             BLACK.stroke_width(2),
         ))
-        .map_err(fail)?
-        .label(format!("p-wave speed sqrt(M/rho_c) = {speed:.0} m/s"))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-    legend(&mut chart)?;
-    root.present().map_err(fail)
+        .map_err(fail)?;
+    colour_bar(&side, "pressure rise (Pa)", top)
 }
 
-/// Arrows from `origins` along `vectors` (same units as the axes).
+/// A vertical colour bar of [`heat`] from 0 to `top`, with its axis labelled.
+fn colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    label: &str,
+    top: f64,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mut bar = ChartBuilder::on(area)
+        .caption(label, ("sans-serif", 13))
+        .margin_top(40)
+        .margin_bottom(57)
+        .margin_right(8)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..1.0, 0.0..top)
+        .map_err(fail)?;
+    bar.configure_mesh()
+        .disable_x_mesh()
+        .disable_x_axis()
+        .disable_y_mesh()
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(fail)?;
+    const STEPS: usize = 64;
+    bar.draw_series((0..STEPS).map(|k| {
+        let (f0, f1) = (k as f64 / STEPS as f64, (k + 1) as f64 / STEPS as f64);
+        Rectangle::new(
+            [(0.0, f0 * top), (1.0, f1 * top)],
+            heat(0.5 * (f0 + f1)).filled(),
+        )
+    }))
+    .map_err(fail)?;
+    Ok(())
+}
+
+/// What an arrow chart draws beside the arrows: a circle (the intruder, centre and radius
+/// in axis units) and a reference arrow of `length` axis units with its meaning.
+pub struct ArrowKey {
+    pub disc: ((f64, f64), f64),
+    pub length: f64,
+    pub meaning: String,
+}
+
+/// Arrows from `origins` along `vectors` (same units as the axes), on equal axes, with the
+/// intruder outlined and a reference arrow in the lower left corner.
 pub fn arrows(
     path: &Path,
     title: &str,
@@ -277,10 +358,12 @@ pub fn arrows(
     origins: &[(f64, f64)],
     vectors: &[(f64, f64)],
     window: ((f64, f64), (f64, f64)),
+    key: &ArrowKey,
 ) -> Result<()> {
-    let root = BitMapBackend::new(path, (800, 800)).into_drawing_area();
+    let size = equal_aspect(window, 760);
+    let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
-    let mut chart = chart(&root, title, 16, window, axes)?;
+    let mut chart = chart(&root, title, 15, window, axes)?;
     let colour = PALETTE[0];
     chart
         .draw_series(origins.iter().zip(vectors).map(|(&o, &v)| {
@@ -290,17 +373,67 @@ pub fn arrows(
     chart
         .draw_series(origins.iter().map(|&o| Circle::new(o, 1, colour.filled())))
         .map_err(fail)?;
+    let ((cx, cy), r) = key.disc;
+    let outline: Vec<(f64, f64)> = (0..=72)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 72.0;
+            (cx + r * a.cos(), cy + r * a.sin())
+        })
+        .collect();
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            outline,
+            BLACK.stroke_width(2),
+        )))
+        .map_err(fail)?;
+    let ((x0, x1), (y0, y1)) = window;
+    let at = (x0 + 0.05 * (x1 - x0), y0 + 0.05 * (y1 - y0));
+    let tip = (at.0 + key.length, at.1);
+    let head = 0.25 * key.length;
+    chart
+        .draw_series([
+            PathElement::new(vec![at, tip], BLACK.stroke_width(2)),
+            PathElement::new(
+                vec![
+                    (tip.0 - head, tip.1 + 0.5 * head),
+                    tip,
+                    (tip.0 - head, tip.1 - 0.5 * head),
+                ],
+                BLACK.stroke_width(2),
+            ),
+        ])
+        .map_err(fail)?;
+    chart
+        .draw_series(std::iter::once(Text::new(
+            key.meaning.clone(),
+            (tip.0 + 0.3 * head, at.1 + 0.4 * head),
+            ("sans-serif", 14),
+        )))
+        .map_err(fail)?;
     root.present().map_err(fail)
 }
 
-/// Point clouds side by side, one panel per `(caption, clouds)`; each cloud is one colour.
+/// Label areas and margins of [`chart`] in pixels, for sizing equal-aspect figures.
+const CHART_FRAME: (u32, u32) = (65 + 24, 45 + 24 + 40);
+
+/// The image size for `window` at `width` pixels so that a unit is as long along y as x.
+fn equal_aspect(window: ((f64, f64), (f64, f64)), width: u32) -> (u32, u32) {
+    let ((x0, x1), (y0, y1)) = window;
+    let plot = f64::from(width - CHART_FRAME.0);
+    let height = plot * (y1 - y0) / (x1 - x0);
+    (width, height.round() as u32 + CHART_FRAME.1)
+}
+
+/// Point clouds side by side on equal axes, one panel per `(caption, clouds)`; each cloud
+/// is one colour.
 pub fn clouds(
     path: &Path,
     title: &str,
     panels: &[Panel],
     window: ((f64, f64), (f64, f64)),
 ) -> Result<()> {
-    let root = BitMapBackend::new(path, (600 * panels.len() as u32, 480)).into_drawing_area();
+    let (w, h) = equal_aspect(window, 600);
+    let root = BitMapBackend::new(path, (w * panels.len() as u32, h + 30)).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
     let root = root.titled(title, ("sans-serif", 20)).map_err(fail)?;
     let areas = root.split_evenly((1, panels.len().max(1)));
@@ -322,6 +455,26 @@ mod tests {
 
     fn is_png(path: &Path) -> bool {
         std::fs::read(path).is_ok_and(|b| b.starts_with(b"\x89PNG\r\n\x1a\n") && b.len() > 1000)
+    }
+
+    #[test]
+    fn the_legend_goes_to_the_corner_without_data() {
+        let ranges = ((0.0, 1.0), (0.0, 1.0));
+        // Data rising from lower left to upper right, as depth against energy.
+        let rising: Vec<(f64, f64)> = (0..=10).map(|k| (0.1 * k as f64, 0.1 * k as f64)).collect();
+        let corner = emptiest_corner(&rising, ranges);
+        assert!(
+            matches!(
+                corner,
+                SeriesLabelPosition::UpperLeft | SeriesLabelPosition::LowerRight
+            ),
+            "{corner:?}"
+        );
+        let upper_left: Vec<(f64, f64)> = vec![(0.1, 0.9), (0.2, 0.8), (0.9, 0.9), (0.1, 0.1)];
+        assert!(matches!(
+            emptiest_corner(&upper_left, ranges),
+            SeriesLabelPosition::LowerRight
+        ));
     }
 
     #[test]
@@ -348,6 +501,11 @@ mod tests {
             &[(0.0, 0.0)],
             &[(0.1, -0.2)],
             ((-1.0, 1.0), (-1.0, 1.0)),
+            &ArrowKey {
+                disc: ((0.0, 0.0), 0.5),
+                length: 0.15,
+                meaning: "unit".into(),
+            },
         )
         .unwrap();
         assert!(is_png(&p));

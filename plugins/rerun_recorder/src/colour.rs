@@ -3,7 +3,8 @@
 //! Rerun draws the colours it is given, so the map is chosen here: continuous fields go
 //! through a perceptually ordered ramp (dark blue to yellow, close to viridis), the plastic
 //! strain rate and the inertial number on a logarithmic scale over fixed decades (as the
-//! paper's Fig. 2), pressure and speed linearly from 0 to the frame's 99th percentile; phase
+//! paper's Fig. 2), pressure and speed linearly from 0 to the frame's 99th percentile of each body (so a
+//! stiff intruder's stress ringing does not set the bed's scale); phase
 //! and body are categories. The exact value of the field is recorded beside the colour.
 
 use regolith::body::{Body, PointStates, Points};
@@ -59,16 +60,45 @@ impl Field {
     }
 
     /// Colours for `values`; `largest` is the top of the scale of the linear fields (the
-    /// frame's 99th percentile over all bodies).
+    /// frame's 99th percentile over the body's points).
     pub fn colours(self, values: &[f64], largest: f64, out: &mut Vec<[u8; 4]>) {
         out.clear();
         out.extend(values.iter().map(|&v| match self {
             Field::Pressure | Field::Speed => linear(v, largest),
-            Field::PlasticStrainRate => ramp(log_fraction(v, 1e-3, 1e3)),
-            Field::InertialNumber => ramp(log_fraction(v, 1e-4, 1.0)),
+            _ => self.colour(v),
+        }));
+    }
+
+    /// The colour of `v` for the fields whose scale does not depend on the frame.
+    pub fn colour(self, v: f64) -> [u8; 4] {
+        match self {
+            Field::Pressure | Field::Speed => ramp(0.0),
+            Field::PlasticStrainRate | Field::InertialNumber => {
+                let (lo, hi) = self.log_range();
+                ramp(log_fraction(v, lo, hi))
+            }
             Field::Phase => PHASES[(v as usize).min(PHASES.len() - 1)],
             Field::Body => BODIES[(v as usize) % BODIES.len()],
-        }));
+        }
+    }
+
+    /// The fixed decades of the log-scaled fields (zero for the others).
+    pub fn log_range(self) -> (f64, f64) {
+        match self {
+            Field::PlasticStrainRate => (1e-3, 1e3),
+            Field::InertialNumber => (1e-4, 1.0),
+            _ => (0.0, 0.0),
+        }
+    }
+
+    /// The field's unit, as the legend shows it.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Field::Pressure => "Pa",
+            Field::Speed => "m/s",
+            Field::PlasticStrainRate => "1/s",
+            Field::InertialNumber | Field::Phase | Field::Body => "-",
+        }
     }
 
     /// Whether the colour scale depends on the frame (its 99th percentile).
@@ -120,7 +150,7 @@ fn log_fraction(v: f64, lo: f64, hi: f64) -> f64 {
 }
 
 /// A viridis-like ramp through five anchor colours, linear between them.
-fn ramp(f: f64) -> [u8; 4] {
+pub fn ramp(f: f64) -> [u8; 4] {
     const ANCHORS: [[f64; 3]; 5] = [
         [68.0, 1.0, 84.0],
         [59.0, 82.0, 139.0],

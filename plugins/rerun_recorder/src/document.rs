@@ -21,50 +21,69 @@ type BodyRow<'a> = (
     &'a GridField,
 );
 
-/// Points (with the domain and the grid) on the left; on the right the depth, velocity and
-/// energy plots, with the contact force, time step and scene document in tabs.
+/// Points (with the domain, the grid and the colour legend) on the left, taking two thirds
+/// of the width; on the right the depth and velocity plots (both components in one plot, so
+/// a component that is zero by symmetry shows as a flat line beside the other rather than
+/// as round-off noise on its own axis), with the energy, contact force, acceleration, time
+/// step and scene document in tabs.
 pub fn layout() -> Blueprint {
-    Blueprint::new(Horizontal::new([
-        Spatial2DView::new("material points")
-            .with_origin("/")
-            .with_contents(["/world/**", "/grid/**"])
-            .into(),
-        Vertical::new([
-            TimeSeriesView::new("depth")
-                .with_contents(["/plots/*/depth"])
+    Blueprint::new(
+        Horizontal::new([
+            Spatial2DView::new("material points")
+                .with_origin("/")
+                .with_contents(["/world/**", "/grid/**"])
                 .into(),
-            TimeSeriesView::new("velocity")
-                .with_contents(["/plots/*/velocity/**"])
+            Vertical::new([
+                TimeSeriesView::new("depth")
+                    .with_contents(["/plots/*/depth"])
+                    .into(),
+                TimeSeriesView::new("velocity")
+                    .with_contents(["/plots/*/velocity/**"])
+                    .into(),
+                Tabs::new([
+                    TimeSeriesView::new("kinetic energy")
+                        .with_contents(["/plots/*/kinetic_energy"])
+                        .into(),
+                    TimeSeriesView::new("contact force")
+                        .with_contents(["/plots/*/contact_force/**"])
+                        .into(),
+                    TimeSeriesView::new("acceleration")
+                        .with_contents(["/plots/*/acceleration/**"])
+                        .into(),
+                    TimeSeriesView::new("time step")
+                        .with_contents(["/plots/time_step"])
+                        .into(),
+                    TextDocumentView::new("scene").with_origin("/scene").into(),
+                ])
                 .into(),
-            Tabs::new([
-                TimeSeriesView::new("kinetic energy")
-                    .with_contents(["/plots/*/kinetic_energy"])
-                    .into(),
-                TimeSeriesView::new("contact force")
-                    .with_contents(["/plots/*/contact_force/**"])
-                    .into(),
-                TimeSeriesView::new("acceleration")
-                    .with_contents(["/plots/*/acceleration/**"])
-                    .into(),
-                TimeSeriesView::new("time step")
-                    .with_contents(["/plots/time_step"])
-                    .into(),
-                TextDocumentView::new("scene").with_origin("/scene").into(),
             ])
             .into(),
         ])
-        .into(),
-    ]))
+        .with_column_shares([2.0, 1.0]),
+    )
 }
 
-/// Logs the static entities: the domain outline and the `scene` document (the scene file
+/// Rerun's 2D views draw y downward; the simulation's y points up (against gravity). A
+/// mirror in y at the roots of the spatial entities makes the view show the bed at the
+/// bottom while every logged position keeps its simulation value.
+pub fn y_up() -> rerun::Transform3D {
+    rerun::Transform3D::from_scale([1.0, -1.0, 1.0])
+}
+
+/// Logs the static entities: the y mirror of the spatial roots (`grid` only when the grid
+/// is recorded), the domain outline and the `scene` document (the scene file
 /// the run wrote into its output directory, if any, and the setup as the World holds it).
 pub fn log_setup(
     stream: &RecordingStream,
     dir: Option<&Path>,
     grid: &GridGeometry,
     bodies: &[BodyRow],
+    with_grid: bool,
 ) {
+    let _ = stream.log_static("world", &y_up());
+    if with_grid {
+        let _ = stream.log_static("grid", &y_up());
+    }
     let _ = stream.log_static("world/domain", &domain_outline(grid));
     let mut md = String::from("# Resolved setup\n\n");
     let _ = writeln!(

@@ -12,6 +12,11 @@
 //!   from its area `sqrt(V / pi)`, a colour from the chosen field) with the field's value per
 //!   point as the component `<field>` (selecting a point in the viewer shows it);
 //! * `world/domain`: the box outline (static);
+//! * `world/legend/<body>` (pressure, speed: each body on its own scale, the top of the
+//!   scale as the component `scale_top`) or `world/legend/all` (the fixed log scales, the
+//!   phase and body swatches): the colour legend, beside the domain;
+//! * `world` and `grid` carry a static mirror in y (`Transform3D`, scale (1, -1, 1)):
+//!   Rerun's 2D views draw y downward, the simulation's y points up;
 //! * `plots/<body>/kinetic_energy` for every body; for tracked bodies also
 //!   `plots/<body>/depth` (downward displacement of the centre of mass since the first
 //!   frame: t = 0, or the time a resumed run starts recording),
@@ -24,11 +29,12 @@
 //!   nodal mass per node);
 //! * `scene`: the scene text and the resolved setup (static, Markdown).
 //!
-//! A default layout (points beside the plots, the scene document in a tab) is sent with the
-//! recording.
+//! The layout (points beside the plots, the scene document in a tab) is sent with the
+//! recording and activated, so the viewer opens arranged rather than in its automatic grid.
 
 mod colour;
 mod document;
+mod legend;
 mod record;
 
 use regolith::bevy_ecs::prelude::*;
@@ -38,7 +44,7 @@ use regolith::registry::Registries;
 use regolith::step::StepSet;
 use serde::Deserialize;
 
-pub use colour::Field;
+pub use colour::{Field, upper_percentile};
 /// The rerun crate this recorder was built with (for reading recordings back).
 pub use rerun;
 

@@ -19,7 +19,7 @@ use rerun::{
 };
 
 use crate::Rerun;
-use crate::{colour, document};
+use crate::{colour, document, legend};
 
 /// What the last frame saw of a tracked body (for the acceleration).
 #[derive(Clone, Copy, Debug)]
@@ -41,6 +41,8 @@ pub struct Recorder {
     radii: Vec<f32>,
     colours: Vec<[u8; 4]>,
     sorted: Vec<f64>,
+    /// No frame logged yet (the static legends go with the first).
+    first: bool,
 }
 
 impl Recorder {
@@ -55,13 +57,13 @@ impl Recorder {
             radii: Vec::new(),
             colours: Vec::new(),
             sorted: Vec::new(),
+            first: true,
         }
     }
 
     /// Opens the file and/or viewer sinks.
     fn open(&self, dir: Option<&PathBuf>) -> Result<RecordingStream, String> {
-        let builder =
-            RecordingStreamBuilder::new("regolith").with_default_blueprint(document::layout());
+        let builder = RecordingStreamBuilder::new("regolith").with_blueprint(document::layout());
         let file = self.params.file.as_ref().map(|f| {
             let f = PathBuf::from(f);
             match dir {
@@ -123,7 +125,13 @@ pub fn record(
     if recorder.stream.is_none() {
         match recorder.open(dir.0.as_ref()) {
             Ok(stream) => {
-                document::log_setup(&stream, dir.0.as_deref(), &grid, &sorted);
+                document::log_setup(
+                    &stream,
+                    dir.0.as_deref(),
+                    &grid,
+                    &sorted,
+                    recorder.params.grid,
+                );
                 recorder.start = sorted.iter().map(|b| b.3.centre_of_mass).collect();
                 recorder.last = vec![None; sorted.len()];
                 recorder.stream = Some(stream);
@@ -143,11 +151,23 @@ pub fn record(
     for ((body, p, st, _, _), values) in sorted.iter().zip(rec.values.iter_mut()) {
         field.values(body, p, st, values);
     }
-    let largest = if field.scaled_by_frame() {
-        colour::upper_percentile(rec.values.iter().flatten().copied(), &mut rec.sorted)
+    // Each body on its own scale: a stiff intruder's stress must not set the bed's.
+    let tops: Vec<f64> = if field.scaled_by_frame() {
+        let scratch = &mut rec.sorted;
+        rec.values
+            .iter()
+            .map(|v| colour::upper_percentile(v.iter().copied(), scratch))
+            .collect()
     } else {
-        0.0
+        vec![0.0; sorted.len()]
     };
+    let scales: Vec<(&str, f64)> = sorted
+        .iter()
+        .zip(&tops)
+        .map(|(b, &t)| (b.0.name.as_str(), t))
+        .collect();
+    legend::log(stream, &grid, field, &scales, rec.first);
+    rec.first = false;
     for (b, (body, p, _, state, f)) in sorted.iter().enumerate() {
         let path = format!("world/{}/points", body.name);
         rec.positions.clear();
@@ -159,7 +179,7 @@ pub fn record(
                 .iter()
                 .map(|&v| (v / std::f64::consts::PI).sqrt() as f32),
         );
-        field.colours(&rec.values[b], largest, &mut rec.colours);
+        field.colours(&rec.values[b], tops[b], &mut rec.colours);
         let points = Points2D::new(rec.positions.iter().copied())
             .with_radii(rec.radii.iter().copied())
             .with_colors(rec.colours.iter().copied());

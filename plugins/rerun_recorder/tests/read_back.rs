@@ -41,15 +41,36 @@ fn scene(file: &Path, extra: &str) -> Scene {
     .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The chunks of the recording (not of its blueprint).
-fn chunks(file: &Path) -> Vec<std::sync::Arc<Chunk>> {
+/// The chunks of the recording's store of `kind` (the recording or its blueprint).
+fn store_chunks(file: &Path, kind: StoreKind) -> Vec<std::sync::Arc<Chunk>> {
     let mut reader = std::fs::File::open(file).unwrap();
     let stores = ChunkStore::from_rrd_reader(&ChunkStoreConfig::DEFAULT, &mut reader).unwrap();
     let (_, store) = stores
         .into_iter()
-        .find(|(id, _)| id.kind() == StoreKind::Recording)
-        .expect("a recording store");
+        .find(|(id, _)| id.kind() == kind)
+        .unwrap_or_else(|| panic!("no {kind:?} store"));
     store.iter_physical_chunks().cloned().collect()
+}
+
+/// The chunks of the recording (not of its blueprint).
+fn chunks(file: &Path) -> Vec<std::sync::Arc<Chunk>> {
+    store_chunks(file, StoreKind::Recording)
+}
+
+/// Every value of the float column `component` logged at `path`, one list per frame.
+fn columns(chunks: &[std::sync::Arc<Chunk>], path: &str, component: &'static str) -> Vec<Vec<f64>> {
+    let mut out = Vec::new();
+    for c in chunks
+        .iter()
+        .filter(|c| c.entity_path().to_string() == path)
+    {
+        for batch in c.iter_component::<rerun::components::Scalar>(component.into()) {
+            if !batch.is_empty() {
+                out.push(batch.iter().map(|v| v.0.0).collect());
+            }
+        }
+    }
+    out
 }
 
 /// Every (sim_time, value) of the scalar series at `path`, in time order.
@@ -162,6 +183,11 @@ fn grid_fields_are_recorded_when_asked() {
     ] {
         assert!(paths.contains(p), "{p} missing from {paths:?}");
     }
+    assert_eq!(
+        scales(&chunks, "/grid"),
+        vec![[1.0, -1.0, 1.0]],
+        "the grid's y mirror"
+    );
 }
 
 #[test]
@@ -172,5 +198,60 @@ fn an_unwritable_recording_stops_the_run_with_a_message() {
         fault.message.contains("cannot write the recording"),
         "{}",
         fault.message
+    );
+}
+
+/// The scales of the `Transform3D`s logged at `path`.
+fn scales(chunks: &[std::sync::Arc<Chunk>], path: &str) -> Vec<[f32; 3]> {
+    let scale = rerun::Transform3D::descriptor_scale().component;
+    chunks
+        .iter()
+        .filter(|c| c.entity_path().to_string() == path)
+        .flat_map(|c| {
+            c.iter_component::<rerun::components::Scale3D>(scale)
+                .flat_map(|b| b.iter().map(|s| s.0.0).collect::<Vec<_>>())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The view must show the bed at the bottom: Rerun's 2D space has y down, so the spatial
+/// roots carry a mirror in y; the layout is sent as the active blueprint; and each body's
+/// colours are scaled by its own values, with the legend saying the scale.
+#[test]
+fn the_world_view_is_y_up_with_an_active_layout_and_a_scale_per_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("view.rrd");
+    let mut sim = Simulation::new(&scene(&file, ", every: 20"));
+    sim.run(|_| {}).unwrap();
+    drop(sim);
+    let chunks = chunks(&file);
+
+    assert_eq!(
+        scales(&chunks, "/world"),
+        vec![[1.0, -1.0, 1.0]],
+        "the y mirror"
+    );
+    assert!(
+        !store_chunks(&file, StoreKind::Blueprint).is_empty(),
+        "the layout is sent with the recording"
+    );
+
+    // Each legend bar's top is its own body's 99th percentile of the recorded pressures.
+    let bed = columns(&chunks, "/world/bed/points", "pressure");
+    let disc = columns(&chunks, "/world/intruder/points", "pressure");
+    let bed_top = columns(&chunks, "/world/legend/bed/bar", "scale_top");
+    let disc_top = columns(&chunks, "/world/legend/intruder/bar", "scale_top");
+    assert_eq!(bed_top.len(), bed.len(), "a bed legend per frame");
+    assert_eq!(disc_top.len(), disc.len(), "an intruder legend per frame");
+    let percentile =
+        |v: &[f64]| regolith_rerun::upper_percentile(v.iter().copied(), &mut Vec::new());
+    for (values, top) in bed.iter().zip(&bed_top) {
+        assert_eq!(top, &vec![percentile(values)], "bed scale");
+    }
+    let last = bed.len() - 1;
+    assert_ne!(
+        bed_top[last], disc_top[last],
+        "the intruder's pressures set their own scale"
     );
 }
