@@ -26,7 +26,16 @@ type BodyRow<'a> = (
 /// a component that is zero by symmetry shows as a flat line beside the other rather than
 /// as round-off noise on its own axis), with the energy, contact force, acceleration, time
 /// step and scene document in tabs.
-pub fn layout() -> Blueprint {
+///
+/// The plots list their entities by body: the viewer's entity filters take `/**` only at the
+/// end of a path, so `/plots/*/depth` would match nothing.
+pub fn layout(bodies: &[(&str, bool)]) -> Blueprint {
+    let mut plots = plot_contents(bodies)
+        .into_iter()
+        .map(|(name, contents)| TimeSeriesView::new(name).with_contents(contents));
+    let mut next = || plots.next().expect("plot_contents lists six plots").into();
+    let (depth, velocity) = (next(), next());
+    let tabs = [next(), next(), next(), next()];
     Blueprint::new(
         Horizontal::new([
             Spatial2DView::new("material points")
@@ -34,33 +43,37 @@ pub fn layout() -> Blueprint {
                 .with_contents(["/world/**", "/grid/**"])
                 .into(),
             Vertical::new([
-                TimeSeriesView::new("depth")
-                    .with_contents(["/plots/*/depth"])
-                    .into(),
-                TimeSeriesView::new("velocity")
-                    .with_contents(["/plots/*/velocity/**"])
-                    .into(),
-                Tabs::new([
-                    TimeSeriesView::new("kinetic energy")
-                        .with_contents(["/plots/*/kinetic_energy"])
-                        .into(),
-                    TimeSeriesView::new("contact force")
-                        .with_contents(["/plots/*/contact_force/**"])
-                        .into(),
-                    TimeSeriesView::new("acceleration")
-                        .with_contents(["/plots/*/acceleration/**"])
-                        .into(),
-                    TimeSeriesView::new("time step")
-                        .with_contents(["/plots/time_step"])
-                        .into(),
-                    TextDocumentView::new("scene").with_origin("/scene").into(),
-                ])
+                depth,
+                velocity,
+                Tabs::new(
+                    tabs.into_iter()
+                        .chain([TextDocumentView::new("scene").with_origin("/scene").into()]),
+                )
                 .into(),
             ])
             .into(),
         ])
         .with_column_shares([2.0, 1.0]),
     )
+}
+
+/// The time-series views of [`layout`], in order, with their entity filters.
+fn plot_contents(bodies: &[(&str, bool)]) -> Vec<(&'static str, Vec<String>)> {
+    let each = |tracked_only: bool, tail: &str| -> Vec<String> {
+        bodies
+            .iter()
+            .filter(|b| b.1 || !tracked_only)
+            .map(|b| format!("/plots/{}/{tail}", b.0))
+            .collect()
+    };
+    vec![
+        ("depth", each(true, "depth")),
+        ("velocity", each(true, "velocity/**")),
+        ("kinetic energy", each(false, "kinetic_energy")),
+        ("contact force", each(true, "contact_force/**")),
+        ("acceleration", each(true, "acceleration/**")),
+        ("time step", vec!["/plots/time_step".into()]),
+    ]
 }
 
 /// Rerun's 2D views draw y downward; the simulation's y points up (against gravity). A
@@ -107,4 +120,33 @@ pub fn log_setup(
         let _ = write!(md, "\n# Scene\n\n```ron\n{text}\n```\n");
     }
     let _ = stream.log_static("scene", &rerun::TextDocument::from_markdown(md));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plot_contents;
+
+    /// Rerun's entity filters take a wildcard only as a final `/**`: a filter such as
+    /// `/plots/*/depth` matches nothing and leaves its plot empty.
+    #[test]
+    fn every_plot_filter_names_a_path_or_a_subtree() {
+        let views = plot_contents(&[("bed", false), ("intruder", true)]);
+        assert_eq!(views.len(), 6);
+        for (name, filters) in &views {
+            assert!(!filters.is_empty(), "{name}: no entities");
+            for f in filters {
+                let stem = f.strip_suffix("/**").unwrap_or(f);
+                assert!(!stem.contains('*'), "{name}: {f}");
+                assert!(f.starts_with("/plots/"), "{name}: {f}");
+            }
+        }
+        assert_eq!(views[0].1, ["/plots/intruder/depth"]);
+        assert_eq!(
+            views[2].1,
+            [
+                "/plots/bed/kinetic_energy",
+                "/plots/intruder/kinetic_energy"
+            ]
+        );
+    }
 }

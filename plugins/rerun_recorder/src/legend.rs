@@ -8,7 +8,7 @@
 //! (phase, body). Each bar carries the top of its scale as the component `scale_top`.
 
 use regolith::grid::GridGeometry;
-use rerun::{Boxes2D, Points2D, RecordingStream};
+use rerun::{LineStrips2D, Points2D, RecordingStream};
 
 use crate::colour::{self, Field};
 
@@ -19,12 +19,13 @@ const SEGMENTS: usize = 16;
 fn column(grid: &GridGeometry, slot: usize) -> (f32, f32) {
     let (lo, hi) = (grid.origin, grid.max());
     let w = (hi.x - lo.x) as f32;
-    let x0 = hi.x as f32 + w * (0.05 + 0.22 * slot as f32);
+    let x0 = hi.x as f32 + w * (0.05 + 0.3 * slot as f32);
     (x0, 0.05 * w)
 }
 
 /// A vertical bar of the ramp from `lo` (bottom) to `hi` (top of the domain) for `title`,
-/// with `colours(f)` giving the colour at fraction `f`.
+/// with `colours(f)` giving the colour at fraction `f`; the title names the body (or the
+/// field, for a shared bar) and the unit.
 fn bar(
     stream: &RecordingStream,
     path: &str,
@@ -37,12 +38,14 @@ fn bar(
     let (x0, width) = column(grid, slot);
     let (y0, y1) = (grid.origin.y as f32, grid.max().y as f32);
     let dy = (y1 - y0) / SEGMENTS as f32;
-    let boxes = Boxes2D::from_mins_and_sizes(
-        (0..SEGMENTS).map(|k| [x0, y0 + k as f32 * dy]),
-        std::iter::repeat_n([width, dy], SEGMENTS),
+    // Rerun draws 2D boxes as outlines; strips as wide as the bar draw it filled.
+    let xc = x0 + 0.5 * width;
+    let segments = LineStrips2D::new(
+        (0..SEGMENTS).map(|k| [[xc, y0 + k as f32 * dy], [xc, y0 + (k + 1) as f32 * dy]]),
     )
+    .with_radii([0.5 * width])
     .with_colors((0..SEGMENTS).map(|k| colours((k as f64 + 0.5) / SEGMENTS as f64)));
-    let _ = stream.log(format!("{path}/bar"), &boxes);
+    let _ = stream.log(format!("{path}/bar"), &segments);
     let top = rerun::external::arrow::array::Float64Array::from(vec![scale_top]);
     let _ = stream.log(
         format!("{path}/bar"),
@@ -51,7 +54,7 @@ fn bar(
     );
     let [title, bottom, top] = labels;
     let marks = Points2D::new([
-        [x0, y1 + 0.6 * dy],
+        [x0, y1 + 1.2 * dy],
         [x0 + 1.2 * width, y0],
         [x0 + 1.2 * width, y1],
     ])
@@ -70,15 +73,13 @@ fn swatches(
 ) {
     let (x0, width) = column(grid, 0);
     let y1 = grid.max().y as f32;
-    let dy = width;
-    let boxes = Boxes2D::from_mins_and_sizes(
-        (0..items.len()).map(|k| [x0, y1 - (k as f32 + 1.0) * 1.5 * dy]),
-        std::iter::repeat_n([width, dy], items.len()),
-    )
-    .with_colors(items.iter().map(|i| i.1))
-    .with_labels(items.iter().map(|i| i.0.clone()))
-    .with_show_labels(true);
-    let _ = stream.log_static(format!("{path}/swatches"), &boxes);
+    let y = |k: usize| y1 - (k as f32 + 0.5) * 2.0 * width;
+    let swatches = LineStrips2D::new((0..items.len()).map(|k| [[x0, y(k)], [x0 + width, y(k)]]))
+        .with_radii([0.5 * width])
+        .with_colors(items.iter().map(|i| i.1))
+        .with_labels(items.iter().map(|i| i.0.clone()))
+        .with_show_labels(true);
+    let _ = stream.log_static(format!("{path}/swatches"), &swatches);
 }
 
 /// Logs the legend of this frame. `scales` holds each body's name and the top of its
@@ -94,11 +95,7 @@ pub fn log(
     match field {
         Field::Pressure | Field::Speed => {
             for (slot, &(name, top)) in scales.iter().enumerate() {
-                let labels = [
-                    format!("{name}: {} ({unit})", field.name()),
-                    "0".into(),
-                    format!("{top:.3e}"),
-                ];
+                let labels = [format!("{name} ({unit})"), "0".into(), format!("{top:.3e}")];
                 bar(
                     stream,
                     &format!("world/legend/{name}"),

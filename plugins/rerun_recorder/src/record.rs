@@ -62,8 +62,13 @@ impl Recorder {
     }
 
     /// Opens the file and/or viewer sinks.
-    fn open(&self, dir: Option<&PathBuf>) -> Result<RecordingStream, String> {
-        let builder = RecordingStreamBuilder::new("regolith").with_blueprint(document::layout());
+    fn open(
+        &self,
+        dir: Option<&PathBuf>,
+        bodies: &[(&str, bool)],
+    ) -> Result<RecordingStream, String> {
+        let builder =
+            RecordingStreamBuilder::new("regolith").with_blueprint(document::layout(bodies));
         let file = self.params.file.as_ref().map(|f| {
             let f = PathBuf::from(f);
             match dir {
@@ -123,7 +128,11 @@ pub fn record(
     let mut sorted: Vec<_> = bodies.iter().collect();
     sorted.sort_by_key(|b| b.0.index);
     if recorder.stream.is_none() {
-        match recorder.open(dir.0.as_ref()) {
+        let names: Vec<(&str, bool)> = sorted
+            .iter()
+            .map(|b| (b.0.name.as_str(), b.0.tracked))
+            .collect();
+        match recorder.open(dir.0.as_ref(), &names) {
             Ok(stream) => {
                 document::log_setup(
                     &stream,
