@@ -100,6 +100,14 @@ pub fn make_figures(
         }
         Ok(dir)
     };
+    // The wall time of a run (s), for the titles.
+    let wall = |dir: &Path| -> f64 {
+        std::fs::read_to_string(dir.join("summary.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|s| s["wall_s"].as_f64())
+            .unwrap_or(f64::NAN)
+    };
     let front_dir = single("force_propagation_coarse")?;
     let flow_dir = single("flow_field_coarse")?;
     let splash_dir = single("splash_seguin_coarse")?;
@@ -184,11 +192,12 @@ pub fn make_figures(
             ],
         ),
     )?;
-    let shape: Vec<PathBuf> = impacts
+    let shape_runs: Vec<&Impact> = impacts
         .iter()
         .filter(|r| (r.slope - 1.5).abs() < 1e-9)
-        .map(|r| r.dir.clone())
         .collect();
+    let shape: Vec<PathBuf> = shape_runs.iter().map(|r| r.dir.clone()).collect();
+    let shape_cost = shape_runs.iter().map(|r| r.wall).sum::<f64>();
     let poncelet_runs = shape
         .iter()
         .map(|d| load_run(d, "intruder"))
@@ -204,7 +213,10 @@ pub fn make_figures(
         "poncelet_f.png",
         plot::curves(
             &out.join("poncelet_f.png"),
-            "Poncelet f(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 left); COARSE",
+            &format!(
+                "Poncelet f(z), s = 1.5, {} speeds, 18 ms window fit (paper Fig. 4 left); COARSE, {shape_cost:.0} s",
+                shape.len()
+            ),
             "depth z (m)",
             "f over 3 mm (N)",
             &with_standard_error("f(z)", &f),
@@ -214,7 +226,10 @@ pub fn make_figures(
         "poncelet_h.png",
         plot::curves(
             &out.join("poncelet_h.png"),
-            "Poncelet h(z), s = 1.5, 3 speeds, 18 ms window fit (paper Fig. 4 right); COARSE",
+            &format!(
+                "Poncelet h(z), s = 1.5, {} speeds, 18 ms window fit (paper Fig. 4 right); COARSE, {shape_cost:.0} s",
+                shape.len()
+            ),
             "depth z (m)",
             "h over 3 mm (kg/m)",
             &with_standard_error("h(z)", &h),
@@ -228,7 +243,10 @@ pub fn make_figures(
         "pressure_space_time.png",
         plot::space_time(
             &out.join("pressure_space_time.png"),
-            "Mean pressure rise in 1 cm rings below the impact (paper Fig. 5); COARSE 100 x 100",
+            &format!(
+                "Mean pressure rise in 1 cm rings below the impact (paper Fig. 5); COARSE 100 x 100, {:.0} s",
+                wall(&front_dir)
+            ),
             &diagram.times,
             &diagram.radii,
             &diagram.values,
@@ -240,7 +258,10 @@ pub fn make_figures(
         "flow_field.png",
         plot::arrows(
             &out.join("flow_field.png"),
-            "Bed velocity over the disc's speed at 45 ms, offsets in disc diameters D (paper Fig. 6); COARSE",
+            &format!(
+                "Bed velocity / disc speed at 45 ms, offsets in disc diameters D (Fig. 6); COARSE, {:.0} s",
+                wall(&flow_dir)
+            ),
             ("x offset / D", "y offset / D"),
             &origins,
             &vectors,
@@ -263,7 +284,10 @@ pub fn make_figures(
         "splash.png",
         plot::clouds(
             &out.join("splash.png"),
-            "Splash of a 20 mm disc at 5 m/s, Seguin (2010) grains (paper Fig. 7); COARSE 4 mm",
+            &format!(
+                "Splash of a 20 mm disc at 5 m/s, Seguin (2010) grains (paper Fig. 7); COARSE 4 mm, {:.0} s",
+                wall(&splash_dir)
+            ),
             &panels,
             ((0.0, 0.2), (0.0, 0.12)),
         ),

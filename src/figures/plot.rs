@@ -301,10 +301,10 @@ pub fn space_time(
             BLACK.stroke_width(2),
         ))
         .map_err(fail)?;
-    colour_bar(&side, "pressure rise (Pa)", top)
+    colour_bar(&side, "pressure rise (kPa)", top)
 }
 
-/// A vertical colour bar of [`heat`] from 0 to `top`, with its axis labelled.
+/// A vertical colour bar of [`heat`] from 0 to `top` (Pa), its axis labelled in kPa.
 fn colour_bar<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     label: &str,
@@ -325,7 +325,7 @@ where
         .disable_x_mesh()
         .disable_x_axis()
         .disable_y_mesh()
-        .y_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| format!("{:.0}", v / 1e3))
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(fail)?;
