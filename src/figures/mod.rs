@@ -458,3 +458,36 @@ fn read_cloud(path: &Path) -> Result<Vec<Vec<(f64, f64)>>, Error> {
     }
     Ok(clouds)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::read_impacts;
+
+    /// A run whose intruder is still moving has no final depth: the figures must leave it
+    /// out (and say so), not plot it.
+    #[test]
+    fn runs_not_at_rest_are_left_out_and_counted() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("sweep.csv"), "run\n").unwrap();
+        let run = |name: &str, impact: &str| {
+            let d = dir.path().join(name);
+            std::fs::create_dir(&d).unwrap();
+            let text = format!(
+                r#"{{"overrides": ["bodies.intruder.shape.slope=1.5"], "wall_s": 2.0, "impact": {impact}}}"#
+            );
+            std::fs::write(d.join("summary.json"), text).unwrap();
+        };
+        run(
+            "run_0001",
+            r#"{"impact_energy": 100.0, "at_rest": true, "final_depth": 0.3, "stopping_time": 0.25}"#,
+        );
+        run(
+            "run_0002",
+            r#"{"impact_energy": 200.0, "at_rest": false, "final_depth": null, "stopping_time": null}"#,
+        );
+        let (kept, moving) = read_impacts(dir.path()).unwrap();
+        assert_eq!(moving, 1);
+        assert_eq!(kept.len(), 1);
+        assert_eq!((kept[0].depth, kept[0].slope), (0.3, 1.5));
+    }
+}
