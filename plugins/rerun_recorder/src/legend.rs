@@ -23,9 +23,9 @@ fn column(grid: &GridGeometry, slot: usize) -> (f32, f32) {
     (x0, 0.05 * w)
 }
 
-/// A vertical bar of the ramp from `lo` (bottom) to `hi` (top of the domain) for `title`,
-/// with `colours(f)` giving the colour at fraction `f`; the title names the body (or the
-/// field, for a shared bar) and the unit.
+/// A vertical bar as tall as the domain in legend column `slot`, `colours(f)` giving the
+/// colour at fraction `f` of its height; `labels` are its title (the body, or the field of
+/// a shared bar, and the unit), the bottom value and the top value.
 fn bar(
     stream: &RecordingStream,
     path: &str,
