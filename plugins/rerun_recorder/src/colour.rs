@@ -3,9 +3,9 @@
 //! Rerun draws the colours it is given, so the map is chosen here: continuous fields go
 //! through a perceptually ordered ramp (dark blue to yellow, close to viridis), the plastic
 //! strain rate and the inertial number on a logarithmic scale over fixed decades (as the
-//! paper's Fig. 2), pressure and speed linearly from 0 to the frame's 99th percentile of each body (so a
-//! stiff intruder's stress ringing does not set the bed's scale); phase
-//! and body are categories. The exact value of the field is recorded beside the colour.
+//! paper's Fig. 2), pressure and speed linearly from 0 to the frame's 99th percentile of
+//! each body (so a stiff intruder's stress ringing does not set the bed's scale); phase and
+//! body are categories. The exact value of the field is recorded beside the colour.
 
 use regolith::body::{Body, PointStates, Points};
 use serde::Deserialize;
@@ -63,16 +63,14 @@ impl Field {
     /// frame's 99th percentile over the body's points).
     pub fn colours(self, values: &[f64], largest: f64, out: &mut Vec<[u8; 4]>) {
         out.clear();
-        out.extend(values.iter().map(|&v| match self {
-            Field::Pressure | Field::Speed => linear(v, largest),
-            _ => self.colour(v),
-        }));
+        out.extend(values.iter().map(|&v| self.colour(v, largest)));
     }
 
-    /// The colour of `v` for the fields whose scale does not depend on the frame.
-    pub fn colour(self, v: f64) -> [u8; 4] {
+    /// The colour of `v`; `largest` is the top of the linear fields' scale (the other
+    /// fields ignore it).
+    pub fn colour(self, v: f64, largest: f64) -> [u8; 4] {
         match self {
-            Field::Pressure | Field::Speed => ramp(0.0),
+            Field::Pressure | Field::Speed => linear(v, largest),
             Field::PlasticStrainRate | Field::InertialNumber => {
                 let (lo, hi) = self.log_range();
                 ramp(log_fraction(v, lo, hi))

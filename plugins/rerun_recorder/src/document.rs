@@ -8,7 +8,8 @@ use regolith::body::{Body, BodyState, PointStates, Points};
 use regolith::grid::{GridField, GridGeometry};
 use rerun::RecordingStream;
 use rerun::blueprint::{
-    Blueprint, Horizontal, Spatial2DView, Tabs, TextDocumentView, TimeSeriesView, Vertical,
+    Blueprint, ContainerLike, Horizontal, Spatial2DView, Tabs, TextDocumentView, TimeSeriesView,
+    Vertical,
 };
 
 use crate::record::domain_outline;
@@ -30,28 +31,21 @@ type BodyRow<'a> = (
 /// The plots list their entities by body: the viewer's entity filters take `/**` only at the
 /// end of a path, so `/plots/*/depth` would match nothing.
 pub fn layout(bodies: &[(&str, bool)]) -> Blueprint {
-    let mut plots = plot_contents(bodies)
+    let mut right: Vec<ContainerLike> = plot_contents(bodies)
         .into_iter()
-        .map(|(name, contents)| TimeSeriesView::new(name).with_contents(contents));
-    let mut next = || plots.next().expect("plot_contents lists six plots").into();
-    let (depth, velocity) = (next(), next());
-    let tabs = [next(), next(), next(), next()];
+        .map(|(name, contents)| TimeSeriesView::new(name).with_contents(contents).into())
+        .collect();
+    // Depth and velocity stay in view; the other plots and the scene go into tabs.
+    let tabs = right.split_off(2);
+    let scene = TextDocumentView::new("scene").with_origin("/scene").into();
+    right.push(Tabs::new(tabs.into_iter().chain([scene])).into());
     Blueprint::new(
         Horizontal::new([
             Spatial2DView::new("material points")
                 .with_origin("/")
                 .with_contents(["/world/**", "/grid/**"])
                 .into(),
-            Vertical::new([
-                depth,
-                velocity,
-                Tabs::new(
-                    tabs.into_iter()
-                        .chain([TextDocumentView::new("scene").with_origin("/scene").into()]),
-                )
-                .into(),
-            ])
-            .into(),
+            Vertical::new(right).into(),
         ])
         .with_column_shares([2.0, 1.0]),
     )

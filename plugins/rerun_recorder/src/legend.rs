@@ -103,7 +103,7 @@ pub fn log(
                     slot,
                     labels,
                     top,
-                    |f| colour::linear(f * top, top),
+                    |f| field.colour(f * top, top),
                 );
             }
         }
@@ -114,15 +114,21 @@ pub fn log(
                 format!("{lo:e}"),
                 format!("{hi:e}"),
             ];
-            bar(stream, "world/legend/all", grid, 0, labels, hi, |f| {
-                colour::ramp(f)
-            });
+            bar(
+                stream,
+                "world/legend/all",
+                grid,
+                0,
+                labels,
+                hi,
+                colour::ramp,
+            );
         }
         Field::Phase if first => {
             let items: Vec<_> = ["solid", "flowing", "disconnected"]
                 .iter()
                 .enumerate()
-                .map(|(k, n)| (n.to_string(), field.colour(k as f64)))
+                .map(|(k, n)| (n.to_string(), field.colour(k as f64, 0.0)))
                 .collect();
             swatches(stream, "world/legend/all", grid, &items);
         }
@@ -130,7 +136,7 @@ pub fn log(
             let items: Vec<_> = scales
                 .iter()
                 .enumerate()
-                .map(|(k, &(n, _))| (n.to_string(), field.colour(k as f64)))
+                .map(|(k, &(n, _))| (n.to_string(), field.colour(k as f64, 0.0)))
                 .collect();
             swatches(stream, "world/legend/all", grid, &items);
         }

@@ -167,14 +167,27 @@ fn a_recording_reads_back_with_its_entities_points_and_values() {
     assert!(last > 0.0, "the intruder fell");
 }
 
-#[test]
-fn grid_fields_are_recorded_when_asked() {
+/// Runs the test scene with the recorder's extra parameters `extra` and returns the file
+/// (with the directory that holds it) and the recording's chunks.
+fn record(
+    extra: &str,
+) -> (
+    tempfile::TempDir,
+    std::path::PathBuf,
+    Vec<std::sync::Arc<Chunk>>,
+) {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("grid.rrd");
-    let mut sim = Simulation::new(&scene(&file, ", grid: true, color: Phase"));
+    let file = dir.path().join("run.rrd");
+    let mut sim = Simulation::new(&scene(&file, extra));
     sim.run(|_| {}).unwrap();
     drop(sim);
     let chunks = chunks(&file);
+    (dir, file, chunks)
+}
+
+#[test]
+fn grid_fields_are_recorded_when_asked() {
+    let (_dir, _, chunks) = record(", grid: true, color: Phase");
     let paths: BTreeSet<String> = chunks.iter().map(|c| c.entity_path().to_string()).collect();
     for p in [
         "/grid/bed/velocity",
@@ -220,12 +233,7 @@ fn scales(chunks: &[std::sync::Arc<Chunk>], path: &str) -> Vec<[f32; 3]> {
 /// colours are scaled by its own values, with the legend saying the scale.
 #[test]
 fn the_world_view_is_y_up_with_an_active_layout_and_a_scale_per_body() {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("view.rrd");
-    let mut sim = Simulation::new(&scene(&file, ", every: 20"));
-    sim.run(|_| {}).unwrap();
-    drop(sim);
-    let chunks = chunks(&file);
+    let (_dir, file, chunks) = record(", every: 20");
 
     assert_eq!(
         scales(&chunks, "/world"),
