@@ -51,19 +51,41 @@ enum Command {
         /// Write checkpoint.bin every N steps (for `regolith resume`).
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
         checkpoint_every: Option<u64>,
+        /// Claim the output directory first: skip the run if it completed or another live
+        /// worker holds it (the lines of a plan's jobs.txt; see `sweep --plan`).
+        #[arg(long)]
+        claim: bool,
         #[command(flatten)]
         record: RecordArgs,
     },
     /// Run the cross product of a sweep file's parameter values (resumable), writing sweep.csv.
+    ///
+    /// With --plan DIR it runs nothing and writes the runs for GNU parallel or a Slurm array
+    /// instead (DIR/jobs.txt, DIR/slurm.sbatch); --collect DIR merges a plan's finished runs
+    /// into DIR/sweep.csv.
     Sweep {
-        /// The RON sweep file.
-        sweep: PathBuf,
+        /// The RON sweep file (not with --collect).
+        #[arg(required_unless_present = "collect")]
+        sweep: Option<PathBuf>,
         /// Output directory (default: out/<sweep name>/).
-        #[arg(long)]
+        #[arg(long, conflicts_with_all = ["plan", "collect"])]
         out: Option<PathBuf>,
         /// Runs at once (default: the sweep's `jobs`, else the number of cores).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
         jobs: Option<u64>,
+        /// Write the runs into DIR as a plan (runs/, jobs.txt, slurm.sbatch) instead of
+        /// running them.
+        #[arg(long, value_name = "DIR", conflicts_with = "collect")]
+        plan: Option<PathBuf>,
+        /// Merge the finished runs of the plan in DIR into DIR/sweep.csv; fails while runs
+        /// are missing or failed unless --partial.
+        #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
+        collect: Option<PathBuf>,
+        /// With --collect: succeed with whatever has finished.
+        #[arg(long, requires = "collect")]
+        partial: bool,
+        #[command(flatten)]
+        slurm: SlurmArgs,
     },
     /// Run an accuracy study: each knob moved alone from a baseline, errors against a named
     /// reference run (resumable), writing study.csv, study.md and pareto.png.
@@ -135,6 +157,38 @@ enum Command {
         #[command(flatten)]
         settings: SceneArgs,
     },
+}
+
+/// The resources of a plan's `slurm.sbatch` (with `sweep --plan`).
+#[derive(Args)]
+struct SlurmArgs {
+    /// Time limit per array task, HH:MM:SS (default: the slowest run's estimate, tripled).
+    #[arg(long, value_name = "HH:MM:SS", requires = "plan", value_parser = parse_slurm_time)]
+    slurm_time: Option<String>,
+    /// Partition to submit to.
+    #[arg(long, value_name = "NAME", requires = "plan")]
+    slurm_partition: Option<String>,
+    /// CPUs (threads) per run (default 1).
+    #[arg(long, value_name = "N", requires = "plan", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    slurm_cpus: u32,
+    /// At most N array tasks at once (default: as many as Slurm allows).
+    #[arg(long, value_name = "N", requires = "plan", value_parser = clap::value_parser!(u32).range(1..))]
+    slurm_max_running: Option<u32>,
+}
+
+fn parse_slurm_time(t: &str) -> Result<String, String> {
+    let parts: Vec<&str> = t.split(':').collect();
+    let ok = (1..=3).contains(&parts.len())
+        && parts
+            .iter()
+            .all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
+    if ok {
+        Ok(t.to_string())
+    } else {
+        Err(format!(
+            "expected HH:MM:SS (or MM:SS, or minutes), got `{t}`"
+        ))
+    }
 }
 
 /// How the command line changes a scene (run and check).
@@ -285,14 +339,18 @@ pub fn main_with(app: Regolith) -> ExitCode {
             settings,
             quiet,
             checkpoint_every,
+            claim,
             record,
         } => run(
             &registries,
             &scene,
             out,
             &settings.overrides(),
-            quiet,
-            CheckpointEvery(checkpoint_every),
+            RunFlags {
+                quiet,
+                checkpoints: CheckpointEvery(checkpoint_every),
+                claim,
+            },
             &record,
         ),
         Command::Resume {
@@ -307,9 +365,22 @@ pub fn main_with(app: Regolith) -> ExitCode {
             CheckpointEvery(checkpoint_every),
             &record,
         ),
-        Command::Sweep { sweep, out, jobs } => {
-            run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
-        }
+        Command::Sweep {
+            sweep,
+            out,
+            jobs,
+            plan,
+            collect,
+            partial,
+            slurm,
+        } => match (sweep, plan, collect) {
+            (_, _, Some(dir)) => collect_plan(&dir, partial),
+            (Some(sweep), Some(dir), None) => plan_sweep(&registries, &sweep, &dir, slurm),
+            (Some(sweep), None, None) => {
+                run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
+            }
+            (None, _, None) => unreachable!("clap requires the sweep file without --collect"),
+        },
         Command::Study { study, out, jobs } => {
             run_study_command(&registries, &study, out, jobs.map(|j| j as usize))
         }
@@ -437,13 +508,20 @@ fn set_shares(timings: &std::collections::BTreeMap<String, f64>) -> String {
         .join(", ")
 }
 
+/// The flags of `regolith run` that do not change the scene.
+struct RunFlags {
+    quiet: bool,
+    checkpoints: CheckpointEvery,
+    /// Claim the output directory first (`crate::claim`).
+    claim: bool,
+}
+
 fn run(
     registries: &Rc<Registries>,
     path: &Path,
     out: Option<PathBuf>,
     sets: &[String],
-    quiet: bool,
-    checkpoints: CheckpointEvery,
+    flags: RunFlags,
     record: &RecordArgs,
 ) -> Result<(), Error> {
     let (mut scene, text) = Scene::load(path, sets, registries)?;
@@ -452,15 +530,42 @@ fn run(
         eprintln!("warning: {w}");
     }
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    let bar = progress_bar(quiet);
+    let mut claim = None;
+    if flags.claim {
+        use crate::claim::{Claimed, claim as take};
+        // Done: completed from this very scene text (a changed scene is run again).
+        let done = || {
+            crate::sweep::read_summary(&out).is_some_and(|s| s["status"] == "completed")
+                && std::fs::read_to_string(out.join("scene.ron")).is_ok_and(|t| t == text)
+        };
+        match take(&out, done)
+            .map_err(|e| Error::io(format!("cannot claim {}", out.display()), e))?
+        {
+            Claimed::Mine(c) => claim = Some(c),
+            Claimed::Completed => {
+                println!("{}: already completed, skipped", out.display());
+                return Ok(());
+            }
+            Claimed::Held { holder } => {
+                println!("{}: claimed by {holder}, skipped", out.display());
+                return Ok(());
+            }
+        }
+    }
+    let bar = progress_bar(flags.quiet);
     let mut last_draw = 0u64;
-    let mut progress = |c: &Clock| draw(&bar, &mut last_draw, c);
+    let mut progress = |c: &Clock| {
+        if let Some(claim) = claim.as_mut() {
+            claim.heartbeat();
+        }
+        draw(&bar, &mut last_draw, c)
+    };
     let from = Provenance {
         file: &path.display().to_string(),
         text: &text,
         overrides: sets,
     };
-    let result = run_scene(&scene, &from, &out, checkpoints, &mut progress);
+    let result = run_scene(&scene, &from, &out, flags.checkpoints, &mut progress);
     bar.finish_and_clear();
     report(&result?, &out);
     Ok(())
@@ -478,6 +583,63 @@ fn run_sweep_command(
     run_batch(path, &sweep.name, runs, &out, "sweep.csv", |report| {
         run_sweep(path, &sweep, &out, jobs, shared(registries), report)
     })
+}
+
+fn plan_sweep(
+    registries: &Rc<Registries>,
+    path: &Path,
+    dir: &Path,
+    slurm: SlurmArgs,
+) -> Result<(), Error> {
+    let sweep = Sweep::load(path)?;
+    let options = crate::plan::SlurmOptions {
+        time: slurm.slurm_time,
+        partition: slurm.slurm_partition,
+        cpus: slurm.slurm_cpus,
+        max_running: slurm.slurm_max_running,
+    };
+    let runs = crate::plan::write_sweep_plan(path, &sweep, dir, registries, &options)?;
+    println!(
+        "{}: {runs} runs planned in {}\n  run them: cd {} && parallel -j N < jobs.txt   (or: sbatch slurm.sbatch)\n  then: regolith sweep --collect {}",
+        sweep.name,
+        dir.display(),
+        dir.display(),
+        dir.display()
+    );
+    Ok(())
+}
+
+fn collect_plan(dir: &Path, partial: bool) -> Result<(), Error> {
+    let found = crate::plan::collect(dir)?;
+    println!(
+        "{}: {} of {} runs completed; table in {}",
+        dir.display(),
+        found.completed,
+        found.runs,
+        dir.join("sweep.csv").display()
+    );
+    if !found.missing.is_empty() {
+        println!(
+            "missing ({}): {}",
+            found.missing.len(),
+            found.missing.join(", ")
+        );
+    }
+    for f in &found.failed {
+        println!("failed: {f}");
+    }
+    let short = found.missing.len() + found.failed.len();
+    if short > 0 && !partial {
+        return Err(SceneError::file(
+            &dir.display().to_string(),
+            format!(
+                "{short} of {} runs missing or failed (--partial accepts what has finished)",
+                found.runs
+            ),
+        )
+        .into());
+    }
+    Ok(())
 }
 
 fn run_study_command(

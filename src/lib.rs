@@ -10,6 +10,7 @@
 
 pub mod body;
 pub mod checkpoint;
+pub mod claim;
 pub mod cli;
 pub mod contact;
 pub mod diagnostics;
@@ -25,6 +26,7 @@ pub mod integration;
 pub mod linefit;
 pub mod material;
 pub mod output;
+pub mod plan;
 pub mod plugin;
 pub mod poncelet;
 pub mod registry;

@@ -425,11 +425,19 @@ pub fn expand_dirs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     let mut out = Vec::new();
     for d in dirs {
         if d.join("sweep.csv").is_file() {
-            let mut runs: Vec<PathBuf> = std::fs::read_dir(d)
-                .map_err(|e| format!("{}: {e}", d.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.join("summary.json").is_file())
-                .collect();
+            // A sweep's runs sit in its directory, a plan's (`sweep --plan`) in `runs/`.
+            let mut runs = Vec::new();
+            for base in [d.clone(), d.join("runs")] {
+                if !base.is_dir() {
+                    continue;
+                }
+                runs.extend(
+                    std::fs::read_dir(&base)
+                        .map_err(|e| format!("{}: {e}", base.display()))?
+                        .filter_map(|e| e.ok().map(|e| e.path()))
+                        .filter(|p| p.join("summary.json").is_file()),
+                );
+            }
             runs.sort();
             out.extend(runs);
         } else {
@@ -454,6 +462,23 @@ pub fn to_csv(points: &[PonceletPoint]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sweep_directory_and_a_collected_plan_list_their_runs() {
+        let dir = tempfile::tempdir().unwrap();
+        let sweep = dir.path().join("sweep");
+        let plan = dir.path().join("plan");
+        for run in [sweep.join("run_0001"), plan.join("runs/run_0001")] {
+            std::fs::create_dir_all(&run).unwrap();
+            std::fs::write(run.join("summary.json"), "{}").unwrap();
+        }
+        std::fs::create_dir_all(sweep.join("run_0002")).unwrap(); // never ran
+        for d in [&sweep, &plan] {
+            std::fs::write(d.join("sweep.csv"), "run\n").unwrap();
+        }
+        let found = expand_dirs(&[sweep.clone(), plan.clone()]).unwrap();
+        assert_eq!(found, [sweep.join("run_0001"), plan.join("runs/run_0001")]);
+    }
 
     #[test]
     fn spline_reproduces_cubics_exactly_and_curves_closely() {

@@ -26,6 +26,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde::Deserialize;
 
+use crate::claim::Claimed;
 use crate::error::{Error, SceneError};
 use crate::output::write_atomic;
 use crate::registry::Registries;
@@ -165,9 +166,11 @@ pub(crate) fn field(s: &str) -> String {
     }
 }
 
-/// Rewrites `sweep.csv` from the runs' summaries (runs not yet done get `pending`).
-fn write_table(
-    sweep: &Sweep,
+/// Rewrites `sweep.csv` in `out` from the runs' summaries (runs not yet done get
+/// `pending`); `keys` are the varied keys, `errors` the failures (run index, message) the
+/// summaries do not record.
+pub(crate) fn write_table(
+    keys: &[String],
     runs: &[Planned],
     out: &Path,
     errors: &[(usize, String)],
@@ -179,9 +182,9 @@ fn write_table(
         "peak_deceleration",
     ];
     let mut csv = String::from("run");
-    for v in &sweep.vary {
+    for key in keys {
         csv.push(',');
-        csv.push_str(&field(&v.key));
+        csv.push_str(&field(key));
     }
     csv.push_str(",status,steps,wall_s,particle_steps_per_s");
     for m in metrics {
@@ -189,7 +192,7 @@ fn write_table(
         csv.push_str(m);
     }
     // Appended after `failure` so that columns scripts already read keep their places.
-    csv.push_str(",failure,at_rest,depth_at_end\n");
+    csv.push_str(",failure,at_rest,depth_at_end,host,threads,regolith_version,state_hash\n");
     for (i, run) in runs.iter().enumerate() {
         let summary = read_summary(&out.join(&run.dir))
             .filter(|s| is_completed(s, &run.sets) || s["status"] == "failed")
@@ -232,10 +235,38 @@ fn write_table(
                 .as_f64()
                 .map_or(String::new(), |v| v.to_string()),
         );
+        for key in ["host", "threads", "regolith_version"] {
+            row.push(match &summary[key] {
+                serde_json::Value::String(s) => field(s),
+                serde_json::Value::Null => String::new(),
+                v => v.to_string(),
+            });
+        }
+        row.push(field(&state_hashes(&summary)));
         csv.push_str(&row.join(","));
         csv.push('\n');
     }
     write_atomic(&out.join("sweep.csv"), csv.as_bytes())
+}
+
+/// Every body's final `state_hash` as `name:hash` pairs joined by spaces (empty without a
+/// summary): equal strings mean bitwise equal final states.
+fn state_hashes(summary: &serde_json::Value) -> String {
+    summary["bodies"]
+        .as_array()
+        .map_or(String::new(), |bodies| {
+            bodies
+                .iter()
+                .map(|b| {
+                    format!(
+                        "{}:{}",
+                        b["name"].as_str().unwrap_or(""),
+                        b["state_hash"].as_str().unwrap_or("")
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
 }
 
 /// Runs the sweep into `out`, `jobs` runs at once; reports each finished run to `report`.
@@ -249,6 +280,7 @@ pub fn run_sweep(
 ) -> Result<usize, Error> {
     let scene_path = beside(sweep_path, &sweep.scene);
     let runs = sweep.plan();
+    let keys: Vec<String> = sweep.vary.iter().map(|v| v.key.clone()).collect();
     let batch = Batch {
         scene: &scene_path,
         runs: &runs,
@@ -256,7 +288,7 @@ pub fn run_sweep(
         jobs: jobs.or(sweep.jobs),
     };
     batch.run(registries, report, |errors| {
-        write_table(sweep, &runs, out, errors).map_err(|e| Error::io("cannot write sweep.csv", e))
+        write_table(&keys, &runs, out, errors).map_err(|e| Error::io("cannot write sweep.csv", e))
     })
 }
 
@@ -320,11 +352,18 @@ impl Batch<'_> {
                         let mut errors =
                             errors.lock().expect("no run panics while holding the lock");
                         match result {
-                            Ok(_) => report(&format!(
+                            Ok(Claimed::Mine(_)) => report(&format!(
                                 "{}: completed ({})",
                                 run.dir,
                                 run.values.join(", ")
                             )),
+                            Ok(Claimed::Completed) => report(&format!(
+                                "{}: completed by another worker, skipped",
+                                run.dir
+                            )),
+                            Ok(Claimed::Held { holder }) => {
+                                report(&format!("{}: claimed by {holder}, skipped", run.dir))
+                            }
                             Err(e) => {
                                 report(&format!(
                                     "{}: failed ({}): {e}",
@@ -344,12 +383,20 @@ impl Batch<'_> {
         Ok(errors.into_inner().map(|e| e.len()).unwrap_or(0))
     }
 
+    /// Runs `run` unless another worker completed it or holds it (the `claim` module, as
+    /// for the lines of a plan); returns what the claim found, with the claim released.
     fn run_one(
         &self,
         run: &Planned,
         pool: &rayon::ThreadPool,
         registries: &Rc<Registries>,
-    ) -> Result<(), Error> {
+    ) -> Result<Claimed, Error> {
+        let dir = self.out.join(&run.dir);
+        let claimed = crate::claim::claim(&dir, || completed(&dir, &run.sets))
+            .map_err(|e| Error::io(format!("cannot claim {}", dir.display()), e))?;
+        let Claimed::Mine(mut claim) = claimed else {
+            return Ok(claimed);
+        };
         let (scene, text) = Scene::load(self.scene, &run.sets, registries)?;
         let from = Provenance {
             file: &self.scene.display().to_string(),
@@ -360,11 +407,11 @@ impl Batch<'_> {
             run_scene(
                 &scene,
                 &from,
-                &self.out.join(&run.dir),
+                &dir,
                 CheckpointEvery(None),
-                &mut |_: &crate::sim::Clock| {},
+                &mut |_: &crate::sim::Clock| claim.heartbeat(),
             )
-        })
-        .map(|_| ())
+        })?;
+        Ok(Claimed::Mine(claim))
     }
 }

@@ -249,9 +249,11 @@ pub fn write_or_fault(path: &Path, bytes: &[u8], clock: &Clock, faults: &OutputF
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+/// The temporary file is named after the process, so that two processes sharing a
+/// directory (two workers of one sweep writing `sweep.csv`) never write into each other's.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
+    tmp.push(format!(".tmp.{}", std::process::id()));
     let tmp = PathBuf::from(tmp);
     {
         let mut f = std::fs::File::create(&tmp)?;

@@ -35,6 +35,10 @@ pub struct Summary {
     /// Body force per unit mass (m/s^2).
     pub gravity: [f64; 2],
     pub threads: usize,
+    /// The machine the run ran on (its host name), for tables merged from many machines.
+    pub host: String,
+    /// The `regolith` version that produced the run.
+    pub regolith_version: String,
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
     /// Wall time per step set (s).
