@@ -55,6 +55,17 @@ fn path_with_regolith() -> String {
     format!("{bin}:{}", std::env::var("PATH").unwrap_or_default())
 }
 
+/// Starts two copies of `command` together, waits for both, and returns their standard
+/// outputs, one after the other (each must succeed).
+fn two_at_once(command: impl Fn() -> Command) -> String {
+    let spawn = || command().stdout(Stdio::piped()).spawn().unwrap();
+    let (a, b) = (spawn(), spawn());
+    [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()]
+        .iter()
+        .map(ok)
+        .collect()
+}
+
 /// The `state_hash` column of a sweep.csv, by row.
 fn hashes(csv: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(csv).unwrap();
@@ -135,19 +146,14 @@ fn two_workers_on_one_plan_run_each_run_exactly_once() {
     ));
     let plan = dir.path().join("plan");
     // Two workers each take every line of jobs.txt in order, started together.
-    let worker = || {
-        Command::new("sh")
-            .arg("jobs.txt")
+    let text = two_at_once(|| {
+        let mut c = Command::new("sh");
+        c.arg("jobs.txt")
             .current_dir(&plan)
             .env("PATH", path_with_regolith())
-            .env("RAYON_NUM_THREADS", "1")
-            .stdout(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (a, b) = (worker(), worker());
-    let out = [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()];
-    let text: String = out.iter().map(ok).collect();
+            .env("RAYON_NUM_THREADS", "1");
+        c
+    });
     for run in ["run_0001", "run_0002", "run_0003", "run_0004"] {
         let ran = text.matches(&format!("outputs in runs/{run}\n")).count();
         let skipped = text
@@ -280,26 +286,19 @@ fn bad_plans_are_refused_in_one_line() {
 fn two_local_sweeps_on_one_output_directory_share_the_runs() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = tiny_sweep(dir.path(), 0.005);
-    let worker = || {
-        Command::new(BIN)
-            .args([
-                "sweep",
-                sweep.to_str().unwrap(),
-                "--out",
-                "shared",
-                "--jobs",
-                "1",
-            ])
-            .current_dir(dir.path())
-            .stdout(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (a, b) = (worker(), worker());
-    let text: String = [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()]
-        .iter()
-        .map(ok)
-        .collect();
+    let text = two_at_once(|| {
+        let mut c = Command::new(BIN);
+        c.args([
+            "sweep",
+            sweep.to_str().unwrap(),
+            "--out",
+            "shared",
+            "--jobs",
+            "1",
+        ])
+        .current_dir(dir.path());
+        c
+    });
     for run in ["run_0001", "run_0002", "run_0003", "run_0004"] {
         let ran = text.matches(&format!("{run}: completed (")).count();
         assert_eq!(ran, 1, "{run}:\n{text}");
