@@ -49,13 +49,23 @@ pub struct Claim {
 /// The name of a claim file in a run directory.
 const FILE: &str = "claim";
 
+/// This machine's host name, as claims and `summary.json` record it.
+pub fn host() -> String {
+    gethostname::gethostname().to_string_lossy().into_owned()
+}
+
 /// This process as a claim holder: `host pid`.
 fn me() -> String {
-    format!(
-        "{} {}",
-        gethostname::gethostname().to_string_lossy(),
-        std::process::id()
-    )
+    format!("{} {}", host(), std::process::id())
+}
+
+/// The holder (`host pid`) written in the claim at `path`; empty if it cannot be read or is
+/// still being written.
+fn holder(path: &Path) -> String {
+    std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .trim()
+        .to_string()
 }
 
 /// Claims the run directory `dir` (created if missing) for this process, unless `done()`
@@ -88,8 +98,7 @@ pub fn claim(dir: &Path, done: impl Fn() -> bool) -> std::io::Result<Claimed> {
                 }));
             }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                let holder = std::fs::read_to_string(&path).unwrap_or_default();
-                let holder = holder.trim().to_string();
+                let holder = holder(&path);
                 if !stale(&path, &holder) {
                     return Ok(Claimed::Held { holder });
                 }
@@ -102,16 +111,15 @@ pub fn claim(dir: &Path, done: impl Fn() -> bool) -> std::io::Result<Claimed> {
             Err(e) => return Err(e),
         }
     }
-    let holder = std::fs::read_to_string(&path).unwrap_or_default();
     Ok(Claimed::Held {
-        holder: holder.trim().to_string(),
+        holder: holder(&path),
     })
 }
 
 /// Whether the claim at `path`, held by `holder` (`host pid`), belongs to a worker that is
 /// gone: its process has ended on this host, or its heartbeat is older than the lease.
 fn stale(path: &Path, holder: &str) -> bool {
-    let host = gethostname::gethostname().to_string_lossy().into_owned();
+    let host = host();
     let mut parts = holder.split_whitespace();
     if let (Some(h), Some(pid)) = (parts.next(), parts.next())
         && h == host
@@ -168,8 +176,7 @@ mod tests {
         assert!(!run.join(FILE).exists(), "the claim is released");
 
         // A holder on this host whose process is gone (pid beyond pid_max).
-        let host = gethostname::gethostname().to_string_lossy().into_owned();
-        std::fs::write(run.join(FILE), format!("{host} 4999999\n")).unwrap();
+        std::fs::write(run.join(FILE), format!("{} 4999999\n", host())).unwrap();
         assert!(matches!(claim(&run).unwrap(), Claimed::Mine(_)));
 
         // A live holder on another host keeps its claim while its heartbeat is fresh.

@@ -148,7 +148,7 @@ pub fn write_sweep_plan(
     let plan = PlanFile {
         kind: "sweep".into(),
         name: sweep.name.clone(),
-        keys: sweep.vary.iter().map(|v| v.key.clone()).collect(),
+        keys: sweep.keys(),
         runs,
     };
     let json = serde_json::to_string_pretty(&plan).expect("a plan serialises");

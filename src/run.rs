@@ -250,7 +250,7 @@ pub fn summarize(
         cell_size: grid.cell_size,
         gravity: scene.gravity.to_array(),
         threads: rayon::current_num_threads(),
-        host: gethostname::gethostname().to_string_lossy().into_owned(),
+        host: crate::claim::host(),
         regolith_version: env!("CARGO_PKG_VERSION").to_string(),
         wall_s,
         particle_steps_per_s: if wall_s > 0.0 {

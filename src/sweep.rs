@@ -101,6 +101,11 @@ impl Sweep {
         Ok(sweep)
     }
 
+    /// The varied keys, in the file's order (the table's parameter columns).
+    pub fn keys(&self) -> Vec<String> {
+        self.vary.iter().map(|v| v.key.clone()).collect()
+    }
+
     /// The runs, in order: the last key varies fastest.
     pub fn plan(&self) -> Vec<Planned> {
         let mut runs = vec![Vec::new()];
@@ -280,7 +285,7 @@ pub fn run_sweep(
 ) -> Result<usize, Error> {
     let scene_path = beside(sweep_path, &sweep.scene);
     let runs = sweep.plan();
-    let keys: Vec<String> = sweep.vary.iter().map(|v| v.key.clone()).collect();
+    let keys = sweep.keys();
     let batch = Batch {
         scene: &scene_path,
         runs: &runs,
