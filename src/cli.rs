@@ -1,5 +1,7 @@
 //! The command line: `regolith run` a scene, `check` it without running, `resume` a run
-//! from its checkpoint, or `sweep` a parameter cross product.
+//! from its checkpoint, `sweep` a parameter cross product or `study` the numerical knobs
+//! (here, or planned for GNU parallel and Slurm and collected), `fit` the drag law, or draw
+//! the paper's `figures`.
 //!
 //! Every error ends the program with a non-zero status and one line on stderr that says what
 //! and where; nothing a user types or writes in a scene may cause a panic. A plugin crate
@@ -16,12 +18,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::Regolith;
 use crate::error::{Error, SceneError};
 use crate::output::summary::Summary;
+use crate::plan::{BatchFile, Layout, SlurmOptions, write_plan};
 use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
 use crate::scene::{InitialStress, Preset, Scene, TimeStep};
 use crate::sim::{Clock, Simulation};
-use crate::study::{Study, run_study};
-use crate::sweep::{Sweep, run_sweep};
+use crate::study::Study;
+use crate::sweep::Sweep;
+use crate::workers::run_local;
 
 #[derive(Parser)]
 #[command(
@@ -73,31 +77,25 @@ enum Command {
         /// Runs at once (default: the sweep's `jobs`, else the number of cores).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
         jobs: Option<u64>,
-        /// Write the runs into DIR as a plan (runs/, jobs.txt, slurm.sbatch) instead of
-        /// running them.
-        #[arg(long, value_name = "DIR", conflicts_with = "collect")]
-        plan: Option<PathBuf>,
-        /// Merge the finished runs of the plan in DIR into DIR/sweep.csv; fails while runs
-        /// are missing or failed unless --partial.
-        #[arg(long, value_name = "DIR", conflicts_with = "sweep")]
-        collect: Option<PathBuf>,
-        /// With --collect: succeed with whatever has finished.
-        #[arg(long, requires = "collect")]
-        partial: bool,
         #[command(flatten)]
-        slurm: SlurmArgs,
+        plan: PlanArgs,
     },
     /// Run an accuracy study: each knob moved alone from a baseline, errors against a named
     /// reference run (resumable), writing study.csv, study.md and pareto.png.
+    ///
+    /// --plan DIR and --collect DIR work as for `sweep`.
     Study {
-        /// The RON study file.
-        study: PathBuf,
+        /// The RON study file (not with --collect).
+        #[arg(required_unless_present = "collect")]
+        study: Option<PathBuf>,
         /// Output directory (default: out/<study name>/).
-        #[arg(long)]
+        #[arg(long, conflicts_with_all = ["plan", "collect"])]
         out: Option<PathBuf>,
         /// Runs at once (default: the study's `jobs`, else the number of cores).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
         jobs: Option<u64>,
+        #[command(flatten)]
+        plan: PlanArgs,
     },
     /// Fit the Poncelet drag law m z'' = m g - f(z) - h(z) z'^2 across runs of one shape at
     /// three or more speeds (the paper's section 4.2), writing
@@ -138,6 +136,11 @@ enum Command {
         /// Runs at once in the sweeps (default: the number of cores).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         jobs: Option<u64>,
+        /// Draw only the paper's Fig. 3 (depth_energy.png, stopping_time_energy.png), from
+        /// the table of a sweep already run or collected in DIR (its sweep.csv), with one
+        /// curve per tip slope; runs nothing.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["runs", "scenes", "jobs"])]
+        from: Option<PathBuf>,
     },
     /// Continue a run from the checkpoint.bin in its output directory.
     Resume {
@@ -159,7 +162,26 @@ enum Command {
     },
 }
 
-/// The resources of a plan's `slurm.sbatch` (with `sweep --plan`).
+/// Planning and collecting instead of running (`sweep` and `study`).
+#[derive(Args)]
+struct PlanArgs {
+    /// Write the runs into DIR as a plan (runs/, jobs.txt, slurm.sbatch) instead of
+    /// running them.
+    #[arg(long, value_name = "DIR", conflicts_with = "collect")]
+    plan: Option<PathBuf>,
+    /// Merge the finished runs of the plan in DIR into its table (DIR/sweep.csv, or a
+    /// study's DIR/study.csv and study.md); fails while runs are missing or failed unless
+    /// --partial.
+    #[arg(long, value_name = "DIR")]
+    collect: Option<PathBuf>,
+    /// With --collect: succeed with whatever has finished.
+    #[arg(long, requires = "collect")]
+    partial: bool,
+    #[command(flatten)]
+    slurm: SlurmArgs,
+}
+
+/// The resources of a plan's `slurm.sbatch` (with `--plan`).
 #[derive(Args)]
 struct SlurmArgs {
     /// Time limit per array task, HH:MM:SS (default: the slowest run's estimate, tripled).
@@ -370,20 +392,13 @@ pub fn main_with(app: Regolith) -> ExitCode {
             out,
             jobs,
             plan,
-            collect,
-            partial,
-            slurm,
-        } => match (sweep, plan, collect) {
-            (_, _, Some(dir)) => collect_plan(&dir, partial),
-            (Some(sweep), Some(dir), None) => plan_sweep(&registries, &sweep, &dir, slurm),
-            (Some(sweep), None, None) => {
-                run_sweep_command(&registries, &sweep, out, jobs.map(|j| j as usize))
-            }
-            (None, _, None) => unreachable!("clap requires the sweep file without --collect"),
-        },
-        Command::Study { study, out, jobs } => {
-            run_study_command(&registries, &study, out, jobs.map(|j| j as usize))
-        }
+        } => batch_command::<Sweep>(&registries, sweep, out, jobs, plan),
+        Command::Study {
+            study,
+            out,
+            jobs,
+            plan,
+        } => batch_command::<Study>(&registries, study, out, jobs, plan),
         Command::Fit {
             runs,
             body,
@@ -396,14 +411,18 @@ pub fn main_with(app: Regolith) -> ExitCode {
             runs,
             scenes,
             jobs,
-        } => crate::figures::make_figures(
-            &registries,
-            &scenes,
-            &runs,
-            &out,
-            jobs.map(|j| j as usize),
-            &|line: &str| println!("{line}"),
-        )
+            from,
+        } => match from {
+            Some(dir) => crate::figures::depth_energy_from(&dir, &out),
+            None => crate::figures::make_figures(
+                &registries,
+                &scenes,
+                &runs,
+                &out,
+                jobs.map(|j| j as usize),
+                &|line: &str| println!("{line}"),
+            ),
+        }
         .map(|files| {
             for f in files {
                 println!("{}", f.display());
@@ -571,52 +590,87 @@ fn run(
     Ok(())
 }
 
-fn run_sweep_command(
+/// `regolith sweep` or `regolith study`: collect a plan, write one, or run the file here.
+fn batch_command<B: BatchFile>(
     registries: &Rc<Registries>,
-    path: &Path,
+    file: Option<PathBuf>,
     out: Option<PathBuf>,
-    jobs: Option<usize>,
+    jobs: Option<u64>,
+    plan: PlanArgs,
 ) -> Result<(), Error> {
-    let sweep = Sweep::load(path)?;
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&sweep.name));
-    let runs = sweep.plan().len();
-    run_batch(path, &sweep.name, runs, &out, "sweep.csv", |report| {
-        run_sweep(path, &sweep, &out, jobs, shared(registries), report)
-    })
+    let path = match (file, plan.collect) {
+        (None, Some(dir)) => return collect_plan(&dir, plan.partial),
+        (Some(_), Some(_)) => return Err(both_file_and_collect(B::KIND)),
+        (Some(path), None) => path,
+        (None, None) => unreachable!("clap requires the batch file without --collect"),
+    };
+    let batch = B::load(&path)?;
+    if let Some(dir) = &plan.plan {
+        return plan_batch(&path, &batch, dir, registries, plan.slurm);
+    }
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(batch.name()));
+    let (name, runs) = (batch.name(), batch.runs().len());
+    println!("{name}: {runs} runs into {}", out.display());
+    let report = |line: &str| println!("{line}");
+    let jobs = jobs.map(|j| j as usize);
+    let failed = run_local(&path, &batch, &out, jobs, shared(registries), report)?;
+    println!(
+        "{name}: done, {failed} failed; table in {}",
+        out.join(B::TABLE).display()
+    );
+    if failed > 0 {
+        return Err(Error::Scene(SceneError::file(
+            &path.display().to_string(),
+            format!("{failed} of {runs} runs failed (see {})", B::TABLE),
+        )));
+    }
+    Ok(())
 }
 
-fn plan_sweep(
-    registries: &Rc<Registries>,
+/// The error of a batch file given with `--collect`, which reads only the plan.
+fn both_file_and_collect(kind: &str) -> Error {
+    SceneError::file(
+        "command line",
+        format!("--collect DIR reads the plan in DIR; give it without the {kind} file"),
+    )
+    .into()
+}
+
+/// Writes the plan of `batch` (`sweep --plan` or `study --plan`) and says how to run it.
+fn plan_batch(
     path: &Path,
+    batch: &impl BatchFile,
     dir: &Path,
+    registries: &Rc<Registries>,
     slurm: SlurmArgs,
 ) -> Result<(), Error> {
-    let sweep = Sweep::load(path)?;
-    let options = crate::plan::SlurmOptions {
+    let options = SlurmOptions {
         time: slurm.slurm_time,
         partition: slurm.slurm_partition,
         cpus: slurm.slurm_cpus,
         max_running: slurm.slurm_max_running,
     };
-    let runs = crate::plan::write_sweep_plan(path, &sweep, dir, registries, &options)?;
+    let plan = write_plan(path, batch, dir, Layout::Plan, registries, &options)?;
     println!(
-        "{}: {runs} runs planned in {}\n  run them: cd {} && parallel -j N < jobs.txt   (or: sbatch slurm.sbatch)\n  then: regolith sweep --collect {}",
-        sweep.name,
+        "{}: {} runs planned in {}\n  run them: cd {} && parallel -j N < jobs.txt   (or: sbatch slurm.sbatch)\n  then: regolith {} --collect {}",
+        batch.name(),
+        plan.runs.len(),
         dir.display(),
         dir.display(),
+        plan.kind,
         dir.display()
     );
     Ok(())
 }
 
 fn collect_plan(dir: &Path, partial: bool) -> Result<(), Error> {
-    let found = crate::plan::collect(dir)?;
+    let found = crate::collect::collect(dir)?;
     println!(
         "{}: {} of {} runs completed; table in {}",
         dir.display(),
         found.completed,
         found.runs,
-        dir.join("sweep.csv").display()
+        dir.join(found.table).display()
     );
     if !found.missing.is_empty() {
         println!(
@@ -642,48 +696,10 @@ fn collect_plan(dir: &Path, partial: bool) -> Result<(), Error> {
     Ok(())
 }
 
-fn run_study_command(
-    registries: &Rc<Registries>,
-    path: &Path,
-    out: Option<PathBuf>,
-    jobs: Option<usize>,
-) -> Result<(), Error> {
-    let study = Study::load(path)?;
-    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&study.name));
-    let runs = study.plan().0.len();
-    run_batch(path, &study.name, runs, &out, "study.md", |report| {
-        run_study(path, &study, &out, jobs, shared(registries), report)
-    })
-}
-
 /// A maker of registries for batch threads (an `Rc` cannot cross threads; its contents can).
 fn shared(registries: &Rc<Registries>) -> impl Fn() -> Rc<Registries> + Sync + use<> {
     let copy: Registries = (**registries).clone();
     move || Rc::new(copy.clone())
-}
-
-/// Runs a batch (sweep or study), printing a line per run; an error if any run failed.
-fn run_batch(
-    path: &Path,
-    name: &str,
-    runs: usize,
-    out: &Path,
-    table: &str,
-    go: impl FnOnce(&(dyn Fn(&str) + Sync)) -> Result<usize, Error>,
-) -> Result<(), Error> {
-    println!("{name}: {runs} runs into {}", out.display());
-    let failed = go(&|line: &str| println!("{line}"))?;
-    println!(
-        "{name}: done, {failed} failed; table in {}",
-        out.join(table).display()
-    );
-    if failed > 0 {
-        return Err(Error::Scene(crate::error::SceneError::file(
-            &path.display().to_string(),
-            format!("{failed} of {runs} runs failed (see {table})"),
-        )));
-    }
-    Ok(())
 }
 
 fn resume(

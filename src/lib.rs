@@ -12,6 +12,7 @@ pub mod body;
 pub mod checkpoint;
 pub mod claim;
 pub mod cli;
+pub mod collect;
 pub mod contact;
 pub mod diagnostics;
 pub mod error;
@@ -39,6 +40,7 @@ pub mod stress;
 pub mod study;
 pub mod sweep;
 pub mod verify;
+pub mod workers;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.
 pub use bevy_ecs;

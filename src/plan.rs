@@ -1,23 +1,27 @@
-//! A sweep as a directory of self-contained runs, for engines other than `regolith sweep`:
-//! `regolith sweep SWEEP.ron --plan DIR` writes it, GNU parallel or a Slurm array runs its
-//! `jobs.txt`, and `regolith sweep --collect DIR` merges what has finished.
+//! A sweep or a study as a directory of self-contained runs, for whatever runs them:
+//! `regolith sweep SWEEP.ron --plan DIR` (or `study STUDY.ron --plan DIR`) writes it, GNU
+//! parallel or a Slurm array runs its `jobs.txt`, and `--collect DIR` merges what has
+//! finished. The local `regolith sweep` / `study` write the same plan into their output
+//! directory and run it with the `workers` module, so every way of running shares this code.
 //!
 //! ```text
-//! DIR/plan.json                the sweep's runs: directory, varied values, scene digest
-//! DIR/runs/run_NNNN/scene.ron  each run's scene with every override applied
+//! DIR/plan.json                the runs: directory, varied values, scene digest, cost
+//! DIR/runs/NAME/scene.ron      each run's scene with every override applied
 //! DIR/jobs.txt                 one `regolith run ... --claim` line per run, relative to DIR
 //! DIR/slurm.sbatch             a job array over the lines of jobs.txt
 //! ```
 //!
-//! Runs keep the names `regolith sweep` gives them (`run_NNNN`, in the sweep's order). A
-//! line of `jobs.txt` may be run by several workers at once: `--claim` (the `claim`
-//! module) lets exactly one of them run it and the others skip it, and a run left by a
-//! killed worker is taken over by the next. Planning again into the same directory keeps
-//! finished runs whose scene is unchanged and refuses a directory whose finished runs were
-//! made from other scenes (the sweep changed after planning).
+//! Runs keep the names the local commands give them (`run_NNNN` in a sweep's order, the
+//! knob and value in a study); the local commands put them at the top of their output
+//! directory (no `runs/`), where earlier versions wrote them. A line of `jobs.txt` may be
+//! run by several workers at once: `--claim` (the `claim` module) lets exactly one of them
+//! run it and the others skip it, and a run left by a killed worker is taken over by the
+//! next. Planning again into the same directory keeps finished runs whose scene is
+//! unchanged and refuses a directory whose finished runs were made from other scenes (the
+//! sweep changed after planning).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -25,30 +29,53 @@ use crate::error::{Error, SceneError};
 use crate::output::write_atomic;
 use crate::registry::Registries;
 use crate::scene::Scene;
-use crate::sweep::{Planned, Sweep, beside, read_summary, write_table};
+use crate::study::Study;
+use crate::sweep::{Planned, read_summary};
 
 /// `plan.json`.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct PlanFile {
-    /// `sweep`.
+    /// `sweep` or `study`: which table `--collect` writes.
     pub kind: String,
     pub name: String,
-    /// The varied keys, in the sweep's order (the table's columns).
+    /// The varied keys of a sweep, in its order (the table's parameter columns); empty
+    /// for a study.
     pub keys: Vec<String>,
     pub runs: Vec<PlannedRun>,
+    /// The study file as planned (a study's tables need its knobs and reference).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<Study>,
 }
 
 /// One run of a plan.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct PlannedRun {
-    /// `runs/run_NNNN`, relative to the plan directory.
+    /// The run's directory relative to the plan: `runs/run_NNNN` (a plan), `run_NNNN` (a
+    /// local sweep's output directory).
     pub dir: String,
-    /// The varied values, in the order of `keys`.
+    /// The varied values, in the order of `keys` (a study: the knob and the value).
     pub values: Vec<String>,
     /// FNV-1a digest of the run's `scene.ron`, 16 hex digits.
     pub scene_digest: String,
     /// Estimated wall time on one thread (s).
     pub estimated_s: f64,
+}
+
+/// Where a plan puts its runs: under `runs/` in a plan directory, at the top of a local
+/// command's output directory (as earlier versions did, so their runs are found again).
+#[derive(Clone, Copy, Debug)]
+pub enum Layout {
+    Plan,
+    Local,
+}
+
+impl Layout {
+    fn dir(self, run: &str) -> String {
+        match self {
+            Layout::Plan => format!("runs/{run}"),
+            Layout::Local => run.to_string(),
+        }
+    }
 }
 
 /// Slurm settings of `slurm.sbatch` (`--slurm-*` flags).
@@ -68,7 +95,7 @@ pub struct SlurmOptions {
 const ASSUMED_RATE: f64 = 4.0e6;
 
 /// FNV-1a over `text`, as 16 hex digits.
-fn digest(text: &str) -> String {
+pub(crate) fn digest(text: &str) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in text.bytes() {
         h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
@@ -103,36 +130,72 @@ fn estimate(scene: &Scene) -> f64 {
     steps * sim.particle_count() as f64 / ASSUMED_RATE
 }
 
-/// Writes the plan of `sweep` (read from `sweep_path`) into `dir`; returns the number of
-/// runs.
-pub fn write_sweep_plan(
-    sweep_path: &Path,
-    sweep: &Sweep,
+/// A file of runs of one scene with different overrides: a sweep or a study. What the
+/// local commands, `--plan` and `--collect` need of it.
+pub trait BatchFile: Sized + serde::de::DeserializeOwned {
+    /// `sweep` or `study`: the command, and `plan.json`'s kind.
+    const KIND: &'static str;
+    /// The table a finished batch is read from, in its directory.
+    const TABLE: &'static str;
+    /// Reads the file at `path` and checks it; errors name the file (and line).
+    fn load(path: &Path) -> Result<Self, SceneError> {
+        let (batch, origin) = crate::sweep::load_batch_file(path, Self::KIND, Self::jobs)?;
+        batch.validate(&origin)?;
+        Ok(batch)
+    }
+    /// Refuses what parses but cannot be run (`origin` names the file in messages).
+    fn validate(&self, origin: &str) -> Result<(), SceneError>;
+    fn name(&self) -> &str;
+    /// The scene file, relative to the batch file.
+    fn scene(&self) -> &str;
+    /// Runs at once the file asks for.
+    fn jobs(&self) -> Option<usize>;
+    /// The runs, in order.
+    fn runs(&self) -> Vec<Planned>;
+    /// `plan.json` without its runs.
+    fn head(&self) -> PlanFile;
+    /// Refuses a batch that cannot give its results, before anything is written.
+    fn check(&self, _path: &Path, _registries: &std::rc::Rc<Registries>) -> Result<(), Error> {
+        Ok(())
+    }
+}
+
+/// Writes the plan of `batch` (read from `path`) into `dir` and returns it: every run's
+/// resolved scene, then `plan.json`, `jobs.txt`, `slurm.sbatch` and `logs/`. Refuses
+/// (before writing anything) when a finished run in `dir` ran another scene than the one
+/// planned for it now.
+pub fn write_plan(
+    path: &Path,
+    batch: &impl BatchFile,
     dir: &Path,
+    layout: Layout,
     registries: &std::rc::Rc<Registries>,
     slurm: &SlurmOptions,
-) -> Result<usize, Error> {
-    let scene_path = beside(sweep_path, &sweep.scene);
+) -> Result<PlanFile, Error> {
+    batch.check(path, registries)?;
+    let scene_path = crate::sweep::beside(path, batch.scene());
+    let runs = batch.runs();
     let io = |what: &str, e| Error::io(format!("{}: cannot write {what}", dir.display()), e);
-    let planned = sweep.plan();
-    let mut runs = Vec::with_capacity(planned.len());
-    let mut scenes = Vec::with_capacity(planned.len());
-    for run in &planned {
+    let mut plan = batch.head();
+    let mut scenes = Vec::with_capacity(runs.len());
+    for run in &runs {
         let (scene, text) = resolved_text(&scene_path, run, registries)?;
-        let rel = format!("runs/{}", run.dir);
+        let rel = layout.dir(&run.dir);
         let old = dir.join(&rel);
         let kept = std::fs::read_to_string(old.join("scene.ron")).ok();
         if read_summary(&old).is_some() && kept.as_deref().is_some_and(|k| k != text) {
             return Err(SceneError::file(
-                &sweep_path.display().to_string(),
+                &path.display().to_string(),
                 format!(
-                    "the sweep changed after {} was planned: {rel} ran a different scene; plan into a new directory, or remove {rel}",
-                    dir.display()
+                    "the {} changed after {} was planned: {rel} ran another scene than the {} now gives; plan into a new directory, or remove {rel}",
+                    plan.kind,
+                    dir.display(),
+                    plan.kind
                 ),
             )
             .into());
         }
-        runs.push(PlannedRun {
+        plan.runs.push(PlannedRun {
             dir: rel,
             values: run.values.clone(),
             scene_digest: digest(&text),
@@ -140,17 +203,11 @@ pub fn write_sweep_plan(
         });
         scenes.push(text);
     }
-    for (run, text) in runs.iter().zip(&scenes) {
+    for (run, text) in plan.runs.iter().zip(&scenes) {
         let d = dir.join(&run.dir);
         std::fs::create_dir_all(&d).map_err(|e| io(&run.dir, e))?;
         write_atomic(&d.join("scene.ron"), text.as_bytes()).map_err(|e| io(&run.dir, e))?;
     }
-    let plan = PlanFile {
-        kind: "sweep".into(),
-        name: sweep.name.clone(),
-        keys: sweep.keys(),
-        runs,
-    };
     let json = serde_json::to_string_pretty(&plan).expect("a plan serialises");
     write_atomic(&dir.join("plan.json"), json.as_bytes()).map_err(|e| io("plan.json", e))?;
     write_atomic(&dir.join("jobs.txt"), jobs_text(&plan).as_bytes())
@@ -161,7 +218,7 @@ pub fn write_sweep_plan(
     )
     .map_err(|e| io("slurm.sbatch", e))?;
     std::fs::create_dir_all(dir.join("logs")).map_err(|e| io("logs/", e))?;
-    Ok(plan.runs.len())
+    Ok(plan)
 }
 
 /// The command that runs one planned run, from the plan directory.
@@ -193,12 +250,12 @@ fn sbatch_text(plan: &PlanFile, slurm: &SlurmOptions) -> String {
     let _ = writeln!(s, "#!/bin/bash");
     let _ = writeln!(
         s,
-        "# A Slurm job array over the lines of jobs.txt, written by `regolith sweep --plan`.\n\
+        "# A Slurm job array over the lines of jobs.txt, written by `regolith {} --plan`.\n\
          # Submit from this directory: sbatch slurm.sbatch. Resubmitting is safe: finished\n\
          # runs are skipped and runs held by a live task are left to it. The lines below\n\
          # are yours to edit (account, QOS, modules); the time is the slowest run's\n\
          # estimate tripled ({:.1} s estimated).",
-        slowest
+        plan.kind, slowest
     );
     let _ = writeln!(s, "#SBATCH --job-name={}", plan.name);
     let limit = slurm.max_running.map_or(String::new(), |m| format!("%{m}"));
@@ -224,17 +281,6 @@ fn sbatch_text(plan: &PlanFile, slurm: &SlurmOptions) -> String {
     s
 }
 
-/// What `collect` found.
-#[derive(Debug, Default)]
-pub struct Collected {
-    pub runs: usize,
-    pub completed: usize,
-    /// Runs without a summary yet (never started, or running).
-    pub missing: Vec<String>,
-    /// `run: why` of failed runs and of runs whose scene was edited after planning.
-    pub failed: Vec<String>,
-}
-
 /// Reads `dir/plan.json`, with a one-line error when `dir` holds no plan.
 pub fn read_plan(dir: &Path) -> Result<PlanFile, Error> {
     let path = dir.join("plan.json");
@@ -242,61 +288,21 @@ pub fn read_plan(dir: &Path) -> Result<PlanFile, Error> {
     let text = std::fs::read_to_string(&path).map_err(|_| {
         SceneError::file(
             &dir.display().to_string(),
-            "not a plan directory (no plan.json; write one with `regolith sweep SWEEP.ron --plan DIR`)",
+            "not a plan directory (no plan.json; write one with `regolith sweep SWEEP.ron --plan DIR` or `regolith study STUDY.ron --plan DIR`)",
         )
     })?;
     let plan: PlanFile = serde_json::from_str(&text)
         .map_err(|e| SceneError::at(&origin, e.line(), e.column(), format!("not a plan: {e}")))?;
-    if plan.kind != "sweep" {
-        return Err(SceneError::file(&origin, format!("unknown plan kind `{}`", plan.kind)).into());
+    match (plan.kind.as_str(), &plan.study) {
+        ("sweep", None) | ("study", Some(_)) => {}
+        ("study", None) => {
+            return Err(SceneError::file(&origin, "a study plan without its study").into());
+        }
+        (kind, _) => {
+            return Err(SceneError::file(&origin, format!("unknown plan kind `{kind}`")).into());
+        }
     }
     Ok(plan)
-}
-
-/// Merges the finished runs of the plan in `dir` into `dir/sweep.csv` (every run has a
-/// row; unfinished ones say `pending`) and says what is missing or failed.
-pub fn collect(dir: &Path) -> Result<Collected, Error> {
-    let plan = read_plan(dir)?;
-    let mut found = Collected {
-        runs: plan.runs.len(),
-        ..Collected::default()
-    };
-    let mut errors = Vec::new();
-    let mut rows = Vec::with_capacity(plan.runs.len());
-    for (i, run) in plan.runs.iter().enumerate() {
-        let d: PathBuf = dir.join(&run.dir);
-        let scene = std::fs::read_to_string(d.join("scene.ron")).unwrap_or_default();
-        let summary = read_summary(&d);
-        let status = summary
-            .as_ref()
-            .and_then(|s| s["status"].as_str().map(String::from));
-        if digest(&scene) != run.scene_digest {
-            let why = "its scene.ron was changed or removed after planning".to_string();
-            found.failed.push(format!("{}: {why}", run.dir));
-            errors.push((i, why));
-        } else {
-            match status.as_deref() {
-                Some("completed") => found.completed += 1,
-                Some("failed") => found.failed.push(format!(
-                    "{}: {}",
-                    run.dir,
-                    summary
-                        .as_ref()
-                        .and_then(|s| s["failure"].as_str())
-                        .unwrap_or("failed")
-                )),
-                _ => found.missing.push(run.dir.clone()),
-            }
-        }
-        rows.push(Planned {
-            dir: run.dir.clone(),
-            values: run.values.clone(),
-            sets: Vec::new(),
-        });
-    }
-    write_table(&plan.keys, &rows, dir, &errors)
-        .map_err(|e| Error::io(format!("{}: cannot write sweep.csv", dir.display()), e))?;
-    Ok(found)
 }
 
 #[cfg(test)]

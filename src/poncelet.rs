@@ -419,13 +419,23 @@ pub fn default_table(first: &Path) -> PathBuf {
     }
 }
 
-/// Run directories named on the command line: a sweep's output directory (it has a
-/// `sweep.csv`) stands for all its run directories.
+/// Run directories named on the command line: a plan (`plan.json`: a sweep's output
+/// directory, or a plan run elsewhere and collected) stands for its runs that have a
+/// summary, as does a sweep directory written before plans (it has a `sweep.csv`).
 pub fn expand_dirs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     let mut out = Vec::new();
     for d in dirs {
-        if d.join("sweep.csv").is_file() {
-            // A sweep's runs sit in its directory, a plan's (`sweep --plan`) in `runs/`.
+        if d.join("plan.json").is_file() {
+            // A sweep's output directory or a plan: the runs it lists that have a summary.
+            let plan = crate::plan::read_plan(d).map_err(|e| e.to_string())?;
+            out.extend(
+                plan.runs
+                    .iter()
+                    .map(|r| d.join(&r.dir))
+                    .filter(|p| p.join("summary.json").is_file()),
+            );
+        } else if d.join("sweep.csv").is_file() {
+            // A sweep written before plans: its runs sit in its directory.
             let mut runs = Vec::new();
             for base in [d.clone(), d.join("runs")] {
                 if !base.is_dir() {
@@ -468,16 +478,29 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let sweep = dir.path().join("sweep");
         let plan = dir.path().join("plan");
-        for run in [sweep.join("run_0001"), plan.join("runs/run_0001")] {
+        for run in [sweep.join("run_0001"), plan.join("runs/run_0002")] {
             std::fs::create_dir_all(&run).unwrap();
             std::fs::write(run.join("summary.json"), "{}").unwrap();
         }
         std::fs::create_dir_all(sweep.join("run_0002")).unwrap(); // never ran
-        for d in [&sweep, &plan] {
-            std::fs::write(d.join("sweep.csv"), "run\n").unwrap();
-        }
+        // Not in the plan: left out even with a summary.
+        std::fs::create_dir_all(plan.join("runs/stray")).unwrap();
+        std::fs::write(plan.join("runs/stray/summary.json"), "{}").unwrap();
+        std::fs::write(sweep.join("sweep.csv"), "run\n").unwrap();
+        let run = |d: &str| {
+            format!(r#"{{"dir": "{d}", "values": [], "scene_digest": "", "estimated_s": 1.0}}"#)
+        };
+        std::fs::write(
+            plan.join("plan.json"),
+            format!(
+                r#"{{"kind": "sweep", "name": "p", "keys": [], "runs": [{}, {}]}}"#,
+                run("runs/run_0001"),
+                run("runs/run_0002")
+            ),
+        )
+        .unwrap();
         let found = expand_dirs(&[sweep.clone(), plan.clone()]).unwrap();
-        assert_eq!(found, [sweep.join("run_0001"), plan.join("runs/run_0001")]);
+        assert_eq!(found, [sweep.join("run_0001"), plan.join("runs/run_0002")]);
     }
 
     #[test]

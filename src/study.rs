@@ -19,23 +19,26 @@
 //! hundreds of runs and says little more about each knob's price). Every run is compared with
 //! the reference, the finest run the study can afford, which the study names: the errors are
 //! `|x - x_ref| / |x_ref|` of final depth, stopping time and peak deceleration, and the cost
-//! is the run's wall time on one thread (runs go `jobs` at once, as in a sweep, and are
-//! skipped when already completed). Writes `study.csv`, `study.md` (the table, the reference
-//! named, the frontier marked) and `pareto.png` (depth error against wall time, the runs no
-//! other run beats on both joined up).
+//! is the run's wall time on one thread. The study is planned and run as a sweep is (the
+//! `plan`, `workers` and `collect` modules: `jobs` at once, completed runs skipped, or
+//! `--plan DIR` for GNU parallel and Slurm). Writes `study.csv`, `study.md` (the table, the
+//! reference named, the frontier marked) and `pareto.png` (depth error against wall time,
+//! the runs no other run beats on both joined up).
 
 use std::path::Path;
 use std::rc::Rc;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
+use crate::collect::{RunState, State};
 use crate::error::{Error, SceneError};
 use crate::output::write_atomic;
+use crate::plan::{BatchFile, PlanFile};
 use crate::registry::Registries;
-use crate::sweep::{Batch, Planned, beside, field, is_completed, load_batch_file, read_summary};
+use crate::sweep::{Planned, beside, field};
 
 /// A study file.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Study {
     pub name: String,
@@ -54,7 +57,7 @@ pub struct Study {
 }
 
 /// A labelled set of overrides.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Setting {
     pub label: String,
@@ -63,7 +66,7 @@ pub struct Setting {
 }
 
 /// One knob and the values the study gives it.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Knob {
     pub name: String,
@@ -90,17 +93,6 @@ pub struct Entry {
 const METRICS: [&str; 3] = ["final_depth", "stopping_time", "peak_deceleration"];
 
 impl Study {
-    pub fn load(path: &Path) -> Result<Study, SceneError> {
-        let (study, origin) = load_batch_file(path, "study", |s: &Study| s.jobs)?;
-        if study.knobs.is_empty() || study.knobs.iter().any(|k| k.values.is_empty()) {
-            return Err(SceneError::file(
-                &origin,
-                "knobs needs at least one knob with at least one value",
-            ));
-        }
-        Ok(study)
-    }
-
     /// The runs (the reference first, then the baseline, then each knob value that differs
     /// from a run already planned) and the table's entries.
     pub fn plan(&self) -> (Vec<Planned>, Vec<Entry>) {
@@ -178,14 +170,11 @@ struct Measured {
     metrics: [Option<f64>; 3],
 }
 
-fn measured(out: &Path, run: &Planned) -> (String, Measured) {
-    let Some(summary) = read_summary(&out.join(&run.dir)) else {
-        return ("pending".into(), Measured::default());
-    };
-    if !is_completed(&summary, &run.sets) {
-        let status = summary["status"].as_str().unwrap_or("pending").to_string();
-        return (status, Measured::default());
+fn measured(run: &RunState) -> (String, Measured) {
+    if run.state != State::Completed {
+        return (run.status().into(), Measured::default());
     }
+    let summary = &run.summary;
     let m = Measured {
         wall: summary["wall_s"].as_f64(),
         particle_steps: summary["steps"]
@@ -213,7 +202,7 @@ fn relative_error(x: Option<f64>, reference: Option<f64>) -> Option<f64> {
 /// One finished row: the entry, its run's status and numbers, its errors.
 struct Row<'a> {
     entry: &'a Entry,
-    run: &'a Planned,
+    run: &'a RunState,
     status: String,
     measured: Measured,
     errors: [Option<f64>; 3],
@@ -258,22 +247,18 @@ fn percent(x: Option<f64>) -> String {
 
 /// Rewrites `study.csv`, `study.md` and (once the reference and one other run are in)
 /// `pareto.png` from the runs' summaries.
-fn write_tables(
+pub(crate) fn write_tables(
     study: &Study,
-    runs: &[Planned],
+    runs: &[RunState],
     entries: &[Entry],
     out: &Path,
-    failures: &[(usize, String)],
 ) -> Result<(), Error> {
-    let (ref_status, reference) = measured(out, &runs[0]);
+    let (ref_status, reference) = measured(&runs[0]);
     let mut rows: Vec<Row> = entries
         .iter()
         .map(|entry| {
             let run = &runs[entry.run];
-            let (mut status, measured) = measured(out, run);
-            if failures.iter().any(|(i, _)| *i == entry.run) {
-                status = "failed".into();
-            }
+            let (status, measured) = measured(run);
             let errors =
                 [0, 1, 2].map(|k| relative_error(measured.metrics[k], reference.metrics[k]));
             let impact_error = errors[0].zip(errors[1]).map(|(d, t)| d.max(t));
@@ -391,36 +376,59 @@ fn write_tables(
     Ok(())
 }
 
-/// Runs the study into `out`; returns the number of failed runs.
-pub fn run_study(
-    study_path: &Path,
-    study: &Study,
-    out: &Path,
-    jobs: Option<usize>,
-    registries: impl Fn() -> Rc<Registries> + Sync,
-    report: impl Fn(&str) + Sync,
-) -> Result<usize, Error> {
-    let scene = beside(study_path, &study.scene);
-    // The measures come from the scene's Impact output: refuse a scene without one before
-    // running anything.
-    let (base, _) = crate::scene::Scene::load(&scene, &study.set, &registries())?;
-    if !base.outputs.iter().any(|o| o.name() == "Impact") {
-        return Err(Error::Scene(SceneError::file(
-            &study_path.display().to_string(),
+impl BatchFile for Study {
+    const KIND: &'static str = "study";
+    const TABLE: &'static str = "study.md";
+
+    fn validate(&self, origin: &str) -> Result<(), SceneError> {
+        if self.knobs.is_empty() || self.knobs.iter().any(|k| k.values.is_empty()) {
+            return Err(SceneError::file(
+                origin,
+                "knobs needs at least one knob with at least one value",
+            ));
+        }
+        Ok(())
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn scene(&self) -> &str {
+        &self.scene
+    }
+
+    fn runs(&self) -> Vec<Planned> {
+        self.plan().0
+    }
+
+    fn jobs(&self) -> Option<usize> {
+        self.jobs
+    }
+
+    fn head(&self) -> PlanFile {
+        PlanFile {
+            kind: Self::KIND.into(),
+            name: self.name.clone(),
+            keys: Vec::new(),
+            runs: Vec::new(),
+            study: Some(self.clone()),
+        }
+    }
+
+    /// The measures come from the scene's Impact output: a scene without one is refused.
+    fn check(&self, path: &Path, registries: &Rc<Registries>) -> Result<(), Error> {
+        let scene = beside(path, &self.scene);
+        let (base, _) = crate::scene::Scene::load(&scene, &self.set, registries)?;
+        if base.outputs.iter().any(|o| o.name() == "Impact") {
+            return Ok(());
+        }
+        Err(Error::Scene(SceneError::file(
+            &path.display().to_string(),
             format!(
                 "the study's scene {} has no Impact output, which gives the measures a study compares (add outputs: [Impact(body: ..., surface: ...)])",
                 scene.display()
             ),
-        )));
+        )))
     }
-    let (runs, entries) = study.plan();
-    let batch = Batch {
-        scene: &scene,
-        runs: &runs,
-        out,
-        jobs: jobs.or(study.jobs),
-    };
-    batch.run(registries, report, |failures| {
-        write_tables(study, &runs, &entries, out, failures)
-    })
 }

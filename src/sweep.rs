@@ -13,25 +13,22 @@
 //!     jobs: 2,                                          // runs at once; default: cores
 //! )
 //! ```
-//! Each run writes its own directory `run_NNNN/` (the usual outputs) under the sweep's
-//! output directory; each runs on one thread, as the paper's authors did for throughput. A
-//! run whose `summary.json` already says `completed` with the same overrides is skipped, so
-//! an interrupted sweep continues where it stopped. `sweep.csv` is rewritten atomically
-//! after every run.
+//! The sweep is planned into its output directory (the `plan` module: each run's resolved
+//! scene in `run_NNNN/scene.ron`, with `plan.json` and `jobs.txt`) and run there by the
+//! `workers` module, one thread per run, as the paper's authors did for throughput; the
+//! same plan written elsewhere with `--plan` is run by GNU parallel or Slurm instead. A run
+//! whose `summary.json` already says `completed` is skipped, so an interrupted sweep
+//! continues where it stopped. `sweep.csv` is rewritten atomically after every run (the
+//! `collect` module).
 
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde::Deserialize;
 
-use crate::claim::Claimed;
-use crate::error::{Error, SceneError};
+use crate::collect::{RunState, State};
+use crate::error::SceneError;
 use crate::output::write_atomic;
-use crate::registry::Registries;
-use crate::run::{CheckpointEvery, Provenance, run_scene};
-use crate::scene::Scene;
+use crate::plan::{BatchFile, PlanFile};
 
 /// A sweep file.
 #[derive(Clone, Debug, Deserialize)]
@@ -90,17 +87,6 @@ pub struct Planned {
 }
 
 impl Sweep {
-    pub fn load(path: &Path) -> Result<Sweep, SceneError> {
-        let (sweep, origin) = load_batch_file(path, "sweep", |s: &Sweep| s.jobs)?;
-        if sweep.vary.is_empty() || sweep.vary.iter().any(|v| v.values.is_empty()) {
-            return Err(SceneError::file(
-                &origin,
-                "vary needs at least one key with at least one value",
-            ));
-        }
-        Ok(sweep)
-    }
-
     /// The varied keys, in the file's order (the table's parameter columns).
     pub fn keys(&self) -> Vec<String> {
         self.vary.iter().map(|v| v.key.clone()).collect()
@@ -147,21 +133,6 @@ pub(crate) fn read_summary(dir: &Path) -> Option<serde_json::Value> {
     serde_json::from_str(&text).ok()
 }
 
-/// Whether `summary` is of a completed run with exactly these overrides.
-pub(crate) fn is_completed(summary: &serde_json::Value, sets: &[String]) -> bool {
-    let same = summary["overrides"].as_array().is_some_and(|o| {
-        o.iter()
-            .map(|v| v.as_str().unwrap_or(""))
-            .eq(sets.iter().map(String::as_str))
-    });
-    summary["status"] == "completed" && same
-}
-
-/// Whether the run in `dir` completed with exactly these overrides.
-fn completed(dir: &Path, sets: &[String]) -> bool {
-    read_summary(dir).is_some_and(|s| is_completed(&s, sets))
-}
-
 /// One CSV field, quoted when it holds a comma or a quote.
 pub(crate) fn field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
@@ -171,15 +142,8 @@ pub(crate) fn field(s: &str) -> String {
     }
 }
 
-/// Rewrites `sweep.csv` in `out` from the runs' summaries (runs not yet done get
-/// `pending`); `keys` are the varied keys, `errors` the failures (run index, message) the
-/// summaries do not record.
-pub(crate) fn write_table(
-    keys: &[String],
-    runs: &[Planned],
-    out: &Path,
-    errors: &[(usize, String)],
-) -> std::io::Result<()> {
+/// Rewrites `sweep.csv` in `out` from the runs' states; `keys` are the varied keys.
+pub(crate) fn write_table(keys: &[String], runs: &[RunState], out: &Path) -> std::io::Result<()> {
     let metrics = [
         "final_depth",
         "stopping_time",
@@ -198,48 +162,30 @@ pub(crate) fn write_table(
     }
     // Appended after `failure` so that columns scripts already read keep their places.
     csv.push_str(",failure,at_rest,depth_at_end,host,threads,regolith_version,state_hash\n");
-    for (i, run) in runs.iter().enumerate() {
-        let summary = read_summary(&out.join(&run.dir))
-            .filter(|s| is_completed(s, &run.sets) || s["status"] == "failed")
-            .unwrap_or(serde_json::Value::Null);
-        let error = errors.iter().find(|(k, _)| *k == i).map(|(_, e)| e.clone());
-        let status = match (&error, summary["status"].as_str()) {
-            (Some(_), _) => "failed",
-            (None, Some(s)) => s,
-            (None, None) => "pending",
-        };
-        let mut row = vec![run.dir.clone()];
+    for run in runs {
+        let summary = &run.summary;
+        let number = |v: &serde_json::Value| v.as_f64().map_or(String::new(), |v| v.to_string());
+        let mut row = vec![field(&run.dir)];
         row.extend(run.values.iter().map(|v| field(v)));
-        row.push(status.to_string());
+        row.push(run.status().to_string());
         for key in ["steps", "wall_s", "particle_steps_per_s"] {
-            row.push(
-                summary[key]
-                    .as_f64()
-                    .map_or(String::new(), |v| v.to_string()),
-            );
+            row.push(number(&summary[key]));
         }
         for m in metrics {
-            row.push(
-                summary["impact"][m]
-                    .as_f64()
-                    .map_or(String::new(), |v| v.to_string()),
-            );
+            row.push(number(&summary["impact"][m]));
         }
-        let failure = error
-            .or_else(|| summary["failure"].as_str().map(String::from))
-            .unwrap_or_default();
-        row.push(field(&failure));
+        let failure = match &run.state {
+            State::Failed(why) => why.as_str(),
+            _ => "",
+        };
+        row.push(field(failure));
         let impact = &summary["impact"];
         row.push(
             impact["at_rest"]
                 .as_bool()
                 .map_or(String::new(), |b| b.to_string()),
         );
-        row.push(
-            impact["depth_at_end"]
-                .as_f64()
-                .map_or(String::new(), |v| v.to_string()),
-        );
+        row.push(number(&impact["depth_at_end"]));
         for key in ["host", "threads", "regolith_version"] {
             row.push(match &summary[key] {
                 serde_json::Value::String(s) => field(s),
@@ -247,7 +193,7 @@ pub(crate) fn write_table(
                 v => v.to_string(),
             });
         }
-        row.push(field(&state_hashes(&summary)));
+        row.push(field(&state_hashes(summary)));
         csv.push_str(&row.join(","));
         csv.push('\n');
     }
@@ -274,149 +220,48 @@ fn state_hashes(summary: &serde_json::Value) -> String {
         })
 }
 
-/// Runs the sweep into `out`, `jobs` runs at once; reports each finished run to `report`.
-pub fn run_sweep(
-    sweep_path: &Path,
-    sweep: &Sweep,
-    out: &Path,
-    jobs: Option<usize>,
-    registries: impl Fn() -> Rc<Registries> + Sync,
-    report: impl Fn(&str) + Sync,
-) -> Result<usize, Error> {
-    let scene_path = beside(sweep_path, &sweep.scene);
-    let runs = sweep.plan();
-    let keys = sweep.keys();
-    let batch = Batch {
-        scene: &scene_path,
-        runs: &runs,
-        out,
-        jobs: jobs.or(sweep.jobs),
-    };
-    batch.run(registries, report, |errors| {
-        write_table(&keys, &runs, out, errors).map_err(|e| Error::io("cannot write sweep.csv", e))
-    })
+impl BatchFile for Sweep {
+    const KIND: &'static str = "sweep";
+    const TABLE: &'static str = "sweep.csv";
+
+    fn validate(&self, origin: &str) -> Result<(), SceneError> {
+        if self.vary.is_empty() || self.vary.iter().any(|v| v.values.is_empty()) {
+            return Err(SceneError::file(
+                origin,
+                "vary needs at least one key with at least one value",
+            ));
+        }
+        Ok(())
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn scene(&self) -> &str {
+        &self.scene
+    }
+
+    fn runs(&self) -> Vec<Planned> {
+        self.plan()
+    }
+
+    fn jobs(&self) -> Option<usize> {
+        self.jobs
+    }
+
+    fn head(&self) -> PlanFile {
+        PlanFile {
+            kind: Self::KIND.into(),
+            name: self.name.clone(),
+            keys: self.keys(),
+            runs: Vec::new(),
+            study: None,
+        }
+    }
 }
 
 /// A path written in a batch file (its scene), taken relative to that file's directory.
 pub fn beside(file: &Path, relative: &str) -> PathBuf {
     file.parent().unwrap_or(Path::new(".")).join(relative)
-}
-
-/// Runs of one scene with different overrides, each in its own directory under `out`.
-pub(crate) struct Batch<'a> {
-    pub scene: &'a Path,
-    pub runs: &'a [Planned],
-    pub out: &'a Path,
-    /// Runs at once (default: the number of cores).
-    pub jobs: Option<usize>,
-}
-
-impl Batch<'_> {
-    /// Runs every run not already completed, `jobs` at once on one thread each; after each
-    /// (and once before any) calls `table` with the failures so far (index, message) so
-    /// that the caller's table is always current. Returns how many runs failed.
-    pub fn run(
-        &self,
-        registries: impl Fn() -> Rc<Registries> + Sync,
-        report: impl Fn(&str) + Sync,
-        table: impl Fn(&[(usize, String)]) -> Result<(), Error> + Sync,
-    ) -> Result<usize, Error> {
-        let (runs, out) = (self.runs, self.out);
-        std::fs::create_dir_all(out)
-            .map_err(|e| Error::io(format!("cannot create {}", out.display()), e))?;
-        let pending: Vec<usize> = (0..runs.len())
-            .filter(|&i| !completed(&out.join(&runs[i].dir), &runs[i].sets))
-            .collect();
-        let skipped = runs.len() - pending.len();
-        if skipped > 0 {
-            report(&format!(
-                "{skipped} of {} runs already completed, skipped",
-                runs.len()
-            ));
-        }
-        let errors = Mutex::new(Vec::new());
-        table(&[])?;
-        let next = AtomicUsize::new(0);
-        let jobs = self
-            .jobs
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-            .max(1);
-        std::thread::scope(|scope| {
-            for _ in 0..jobs.min(pending.len().max(1)) {
-                scope.spawn(|| {
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(1)
-                        .build()
-                        .expect("a one-thread pool");
-                    let registries = registries();
-                    loop {
-                        let k = next.fetch_add(1, Ordering::SeqCst);
-                        let Some(&i) = pending.get(k) else { break };
-                        let run = &runs[i];
-                        let result = self.run_one(run, &pool, &registries);
-                        let mut errors =
-                            errors.lock().expect("no run panics while holding the lock");
-                        match result {
-                            Ok(Claimed::Mine(_)) => report(&format!(
-                                "{}: completed ({})",
-                                run.dir,
-                                run.values.join(", ")
-                            )),
-                            Ok(Claimed::Completed) => report(&format!(
-                                "{}: completed by another worker, skipped",
-                                run.dir
-                            )),
-                            Ok(Claimed::Held { holder }) => {
-                                report(&format!("{}: claimed by {holder}, skipped", run.dir))
-                            }
-                            Err(e) => {
-                                report(&format!(
-                                    "{}: failed ({}): {e}",
-                                    run.dir,
-                                    run.values.join(", ")
-                                ));
-                                errors.push((i, e.to_string()));
-                            }
-                        }
-                        if let Err(e) = table(&errors) {
-                            report(&e.to_string());
-                        }
-                    }
-                });
-            }
-        });
-        Ok(errors.into_inner().map(|e| e.len()).unwrap_or(0))
-    }
-
-    /// Runs `run` unless another worker completed it or holds it (the `claim` module, as
-    /// for the lines of a plan); returns what the claim found, with the claim released.
-    fn run_one(
-        &self,
-        run: &Planned,
-        pool: &rayon::ThreadPool,
-        registries: &Rc<Registries>,
-    ) -> Result<Claimed, Error> {
-        let dir = self.out.join(&run.dir);
-        let claimed = crate::claim::claim(&dir, || completed(&dir, &run.sets))
-            .map_err(|e| Error::io(format!("cannot claim {}", dir.display()), e))?;
-        let Claimed::Mine(mut claim) = claimed else {
-            return Ok(claimed);
-        };
-        let (scene, text) = Scene::load(self.scene, &run.sets, registries)?;
-        let from = Provenance {
-            file: &self.scene.display().to_string(),
-            text: &text,
-            overrides: &run.sets,
-        };
-        pool.install(|| {
-            run_scene(
-                &scene,
-                &from,
-                &dir,
-                CheckpointEvery(None),
-                &mut |_: &crate::sim::Clock| claim.heartbeat(),
-            )
-        })?;
-        Ok(Claimed::Mine(claim))
-    }
 }

@@ -44,13 +44,15 @@ fn every_run_of_every_shipped_sweep_and_study_loads() {
         checked += 1;
     };
     for path in shipped("sweeps") {
-        let sweep = regolith::sweep::Sweep::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let sweep = <regolith::sweep::Sweep as regolith::plan::BatchFile>::load(&path)
+            .unwrap_or_else(|e| panic!("{e}"));
         for run in sweep.plan() {
             check(&path, &sweep.scene, &run.sets);
         }
     }
     for path in shipped("studies") {
-        let study = regolith::study::Study::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let study = <regolith::study::Study as regolith::plan::BatchFile>::load(&path)
+            .unwrap_or_else(|e| panic!("{e}"));
         for run in study.plan().0 {
             check(&path, &study.scene, &run.sets);
         }

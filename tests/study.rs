@@ -9,7 +9,9 @@ use std::rc::Rc;
 use std::sync::Mutex;
 
 use regolith::Regolith;
-use regolith::study::{Study, run_study};
+use regolith::plan::BatchFile;
+use regolith::study::Study;
+use regolith::workers::run_local;
 
 fn write_study(dir: &std::path::Path) -> std::path::PathBuf {
     let scene = common::scene_path("impact_tipped_coarse");
@@ -52,7 +54,7 @@ fn run(path: &std::path::Path, out: &std::path::Path) -> Vec<String> {
     let registries = Regolith::default().registries();
     let shared = (*registries).clone();
     let lines = Mutex::new(Vec::new());
-    let failed = run_study(
+    let failed = run_local(
         path,
         &study,
         out,
@@ -136,7 +138,7 @@ fn a_scene_without_impact_measures_is_refused() {
     let registries = Regolith::default().registries();
     let shared = (*registries).clone();
     let out = dir.path().join("out");
-    let err = run_study(
+    let err = run_local(
         &path,
         &study,
         &out,

@@ -7,28 +7,27 @@ use std::process::{Command, Output, Stdio};
 
 const BIN: &str = env!("CARGO_BIN_EXE_regolith");
 
+/// Writes `text` into `dir/name`, with `SCENE` standing for the coarse impact scene's path.
+fn batch_file(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/impact_tipped_coarse.ron");
+    let path = dir.join(name);
+    std::fs::write(&path, text.replace("SCENE", &scene.display().to_string())).unwrap();
+    path
+}
+
 /// A 2 x 2 sweep of 0.005 s coarse impacts under the `accurate` preset (the plan must
 /// carry the preset's settings without applying it twice), written into `dir`.
 fn tiny_sweep(dir: &Path, end: f64) -> PathBuf {
-    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
-    let sweep = dir.join("s.ron");
-    std::fs::write(
-        &sweep,
-        format!(
-            r#"Sweep(
-                name: "tiny",
-                scene: "{}",
-                set: ["time.end={end}", "preset=Accurate"],
-                vary: [
-                    (key: "bodies.intruder.velocity", values: ["(0.0, -2.0)", "(0.0, -4.0)"]),
-                    (key: "contact", values: ["NoSlip", "Frictional(friction: 0.1)"]),
-                ],
-            )"#,
-            scenes.join("impact_tipped_coarse.ron").display()
-        ),
-    )
-    .unwrap();
-    sweep
+    let text = r#"Sweep(
+        name: "tiny",
+        scene: "SCENE",
+        set: ["time.end=END", "preset=Accurate"],
+        vary: [
+            (key: "bodies.intruder.velocity", values: ["(0.0, -2.0)", "(0.0, -4.0)"]),
+            (key: "contact", values: ["NoSlip", "Frictional(friction: 0.1)"]),
+        ],
+    )"#;
+    batch_file(dir, "s.ron", &text.replace("END", &end.to_string()))
 }
 
 fn regolith(args: &[&str], cwd: &Path) -> Output {
@@ -66,6 +65,23 @@ fn two_at_once(command: impl Fn() -> Command) -> String {
         .collect()
 }
 
+/// Runs the plan in `plan` with `parallel -j 2 < jobs.txt`, one thread per run.
+fn run_with_parallel(plan: &Path) {
+    let parallel = Command::new("parallel")
+        .args(["-j", "2"])
+        .current_dir(plan)
+        .env("PATH", path_with_regolith())
+        .env("RAYON_NUM_THREADS", "1")
+        .stdin(std::fs::File::open(plan.join("jobs.txt")).unwrap())
+        .output()
+        .unwrap_or_else(|e| {
+            panic!(
+                "GNU parallel is needed for this test (Debian: parallel; .ci/run installs it): {e}"
+            )
+        });
+    ok(&parallel);
+}
+
 /// The `state_hash` column of a sweep.csv, by row.
 fn hashes(csv: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(csv).unwrap();
@@ -96,19 +112,7 @@ fn a_plan_run_by_gnu_parallel_gives_the_local_sweep_bit_for_bit() {
     let sbatch = std::fs::read_to_string(plan.join("slurm.sbatch")).unwrap();
     assert!(sbatch.contains("#SBATCH --array=1-4\n"), "{sbatch}");
 
-    let parallel = Command::new("parallel")
-        .args(["-j", "2"])
-        .current_dir(&plan)
-        .env("PATH", path_with_regolith())
-        .env("RAYON_NUM_THREADS", "1")
-        .stdin(std::fs::File::open(plan.join("jobs.txt")).unwrap())
-        .output()
-        .unwrap_or_else(|e| {
-            panic!(
-                "GNU parallel is needed for this test (Debian: parallel; .ci/run installs it): {e}"
-            )
-        });
-    ok(&parallel);
+    run_with_parallel(&plan);
     let collected = ok(&regolith(&["sweep", "--collect", "plan"], dir.path()));
     assert!(collected.contains("4 of 4 runs completed"), "{collected}");
 
@@ -123,6 +127,21 @@ fn a_plan_run_by_gnu_parallel_gives_the_local_sweep_bit_for_bit() {
         ],
         dir.path(),
     ));
+    // Runs of 0.005 s end with their intruders moving: no Fig. 3 to draw, and it says so.
+    let figures = regolith(&["figures", "--from", "plan", "--out", "figs"], dir.path());
+    assert!(!figures.status.success());
+    let why = String::from_utf8_lossy(&figures.stderr);
+    assert!(
+        why.contains("no completed run with its intruder at rest to draw (4 left out)"),
+        "{why}"
+    );
+    // The local sweep ran a plan of its own: collecting it rewrites the same table.
+    let local_csv = std::fs::read_to_string(dir.path().join("local/sweep.csv")).unwrap();
+    ok(&regolith(&["sweep", "--collect", "local"], dir.path()));
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("local/sweep.csv")).unwrap(),
+        local_csv
+    );
     let (remote, local) = (
         hashes(&plan.join("sweep.csv")),
         hashes(&dir.path().join("local/sweep.csv")),
@@ -134,6 +153,70 @@ fn a_plan_run_by_gnu_parallel_gives_the_local_sweep_bit_for_bit() {
             .all(|h| h.contains("bed:") && h.contains("intruder:"))
     );
     assert_eq!(remote, local);
+}
+
+/// A study of three runs of 0.005 s on the coarse impact at 12 cells, written into `dir`.
+fn tiny_study(dir: &Path) -> PathBuf {
+    let text = r#"Study(
+        name: "tiny_study",
+        scene: "SCENE",
+        set: ["time.end=0.005", "domain.cells=(12, 12)"],
+        reference: (label: "16 cells", set: ["domain.cells=(16, 16)"]),
+        knobs: [(name: "CFL", values: [(label: "0.3", set: ["time.step=Cfl(0.3)"])])],
+    )"#;
+    batch_file(dir, "study.ron", text)
+}
+
+/// Each run's final state hashes, read from its summary.
+fn summary_hashes(run: &Path) -> String {
+    let text = std::fs::read_to_string(run.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    s["bodies"].to_string()
+}
+
+#[test]
+fn a_study_planned_and_run_by_gnu_parallel_gives_the_local_study() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = tiny_study(dir.path());
+    let s = study.to_str().unwrap();
+    let planned = ok(&regolith(&["study", s, "--plan", "plan"], dir.path()));
+    assert!(planned.contains("3 runs planned"), "{planned}");
+    assert!(planned.contains("regolith study --collect"), "{planned}");
+    let plan = dir.path().join("plan");
+    let jobs = std::fs::read_to_string(plan.join("jobs.txt")).unwrap();
+    assert_eq!(
+        jobs.lines().collect::<Vec<_>>(),
+        [
+            "regolith run runs/reference/scene.ron --out runs/reference --claim --quiet",
+            "regolith run runs/baseline/scene.ron --out runs/baseline --claim --quiet",
+            "regolith run runs/cfl_0.3/scene.ron --out runs/cfl_0.3 --claim --quiet",
+        ]
+    );
+    let half = regolith(&["study", "--collect", "plan"], dir.path());
+    assert!(!half.status.success());
+
+    run_with_parallel(&plan);
+    let collected = ok(&regolith(&["study", "--collect", "plan"], dir.path()));
+    assert!(collected.contains("3 of 3 runs completed"), "{collected}");
+    assert!(collected.contains("study.md"), "{collected}");
+    let csv = std::fs::read_to_string(plan.join("study.csv")).unwrap();
+    assert!(csv.contains("\nCFL,0.3,runs/cfl_0.3,"), "{csv}");
+
+    ok(&regolith(
+        &["study", s, "--out", "local", "--jobs", "2"],
+        dir.path(),
+    ));
+    for run in ["reference", "baseline", "cfl_0.3"] {
+        assert_eq!(
+            summary_hashes(&plan.join("runs").join(run)),
+            summary_hashes(&dir.path().join("local").join(run)),
+            "{run}"
+        );
+    }
+    // A study file with --collect is refused: collect reads only the plan.
+    let both = regolith(&["study", s, "--collect", "plan"], dir.path());
+    assert!(!both.status.success());
+    assert!(String::from_utf8_lossy(&both.stderr).contains("without the study file"));
 }
 
 #[test]

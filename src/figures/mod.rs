@@ -16,11 +16,13 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use crate::error::{Error, SceneError};
+use crate::plan::BatchFile;
 use crate::poncelet::{Derivatives, fit, load_run};
 use crate::registry::Registries;
 use crate::run::{CheckpointEvery, Provenance, run_scene};
 use crate::scene::Scene;
-use crate::sweep::{Sweep, run_sweep};
+use crate::sweep::Sweep;
+use crate::workers::run_local;
 
 use plot::Series;
 
@@ -61,7 +63,7 @@ pub fn make_figures(
         let spec = Sweep::load(&file)?;
         let dir = runs.join(name);
         report(&format!("sweep {name}: {} runs", spec.plan().len()));
-        run_sweep(&file, &spec, &dir, jobs, || Rc::new(shared.clone()), report)?;
+        run_local(&file, &spec, &dir, jobs, || Rc::new(shared.clone()), report)?;
         Ok(dir)
     };
     let speed_axis = format!(
@@ -112,55 +114,21 @@ pub fn make_figures(
     let flow_dir = single("flow_field_coarse")?;
     let splash_dir = single("splash_seguin_coarse")?;
 
-    let mut written = Vec::new();
-    let mut draw = |name: &str, result: Result<(), String>| -> Result<(), Error> {
-        let path = out.join(name);
-        result.map_err(|e| fail(&path.display().to_string(), e))?;
-        written.push(path);
-        Ok(())
-    };
     let (impacts, moving) = read_impacts(&depth_dir)?;
     let cost = |rows: &[Impact]| rows.iter().map(|r| r.wall).sum::<f64>();
-    let by_slope = |rows: &[Impact], f: fn(&Impact) -> f64| -> Vec<Series> {
-        SLOPES
-            .iter()
-            .map(|&s| Series {
-                label: format!("s = {s}"),
-                points: rows
-                    .iter()
-                    .filter(|r| (r.slope - s).abs() < 1e-9)
-                    .map(|r| (r.energy, f(r)))
-                    .collect(),
-                hollow: false,
-            })
-            .collect()
-    };
     let coarse = format!(
         "COARSE 50 x 50 cells, {} runs, {:.0} s of runs{}",
         impacts.len(),
         cost(&impacts),
         not_drawn(moving)
     );
-    draw(
-        "depth_energy.png",
-        plot::curves(
-            &out.join("depth_energy.png"),
-            &format!("Final depth against impact energy (paper Fig. 3 left); {coarse}"),
-            "impact energy over 3 mm (J)",
-            "final depth (m)",
-            &by_slope(&impacts, |r| r.depth),
-        ),
-    )?;
-    draw(
-        "stopping_time_energy.png",
-        plot::curves(
-            &out.join("stopping_time_energy.png"),
-            &format!("Stopping time against impact energy (paper Fig. 3 right); {coarse}"),
-            "impact energy over 3 mm (J)",
-            "stopping time (s)",
-            &by_slope(&impacts, |r| r.stopping),
-        ),
-    )?;
+    let mut written = draw_depth_energy(out, &impacts, &coarse)?;
+    let mut draw = |name: &str, result: Result<(), String>| -> Result<(), Error> {
+        let path = out.join(name);
+        result.map_err(|e| fail(&path.display().to_string(), e))?;
+        written.push(path);
+        Ok(())
+    };
     let (rate, rate_moving) = read_impacts(&rate_dir)?;
     let mu_i: Vec<(f64, f64)> = impacts
         .iter()
@@ -295,11 +263,93 @@ pub fn make_figures(
     Ok(written)
 }
 
-/// The title's note of runs left out because their intruder was still moving at the end.
-fn not_drawn(moving: usize) -> String {
-    match moving {
+/// Draws the paper's Fig. 3 from `impacts` into `out`: final depth and stopping time
+/// against impact energy, one curve per tip slope; `caption` ends both titles. Returns
+/// the files written.
+fn draw_depth_energy(out: &Path, impacts: &[Impact], caption: &str) -> Result<Vec<PathBuf>, Error> {
+    let mut slopes: Vec<f64> = impacts.iter().map(|r| r.slope).collect();
+    slopes.sort_by(f64::total_cmp);
+    slopes.dedup();
+    let by_slope = |f: fn(&Impact) -> f64| -> Vec<Series> {
+        slopes
+            .iter()
+            .map(|&s| Series {
+                label: if s.is_nan() {
+                    "slope not varied".into()
+                } else {
+                    format!("s = {s}")
+                },
+                points: impacts
+                    .iter()
+                    .filter(|r| r.slope.total_cmp(&s).is_eq())
+                    .map(|r| (r.energy, f(r)))
+                    .collect(),
+                hollow: false,
+            })
+            .collect()
+    };
+    // File, title, y axis, measure.
+    type Figure = (&'static str, &'static str, &'static str, fn(&Impact) -> f64);
+    let figures: [Figure; 2] = [
+        (
+            "depth_energy.png",
+            "Final depth against impact energy (paper Fig. 3 left)",
+            "final depth (m)",
+            |r| r.depth,
+        ),
+        (
+            "stopping_time_energy.png",
+            "Stopping time against impact energy (paper Fig. 3 right)",
+            "stopping time (s)",
+            |r| r.stopping,
+        ),
+    ];
+    let mut written = Vec::new();
+    for (name, title, y, f) in figures {
+        let path = out.join(name);
+        plot::curves(
+            &path,
+            &format!("{title}; {caption}"),
+            "impact energy over 3 mm (J)",
+            y,
+            &by_slope(f),
+        )
+        .map_err(|e| fail(&path.display().to_string(), e))?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// `regolith figures --from DIR`: the paper's Fig. 3 from the collected table of a sweep
+/// (DIR/sweep.csv, from `regolith sweep` or `sweep --collect`) whose runs vary the tip
+/// slope and the impact speed of an impact scene; returns the files written into `out`.
+pub fn depth_energy_from(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, Error> {
+    plot::register_font().map_err(|e| fail("font", e))?;
+    std::fs::create_dir_all(out).map_err(|e| fail(&out.display().to_string(), e))?;
+    let (impacts, left_out) = read_impacts(dir)?;
+    if impacts.is_empty() {
+        return Err(fail(
+            &dir.join("sweep.csv").display().to_string(),
+            format!("no completed run with its intruder at rest to draw ({left_out} left out)"),
+        ));
+    }
+    let name = dir
+        .file_name()
+        .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    let caption = format!(
+        "{name}: {} runs, {:.0} s of runs{}",
+        impacts.len(),
+        impacts.iter().map(|r| r.wall).sum::<f64>(),
+        not_drawn(left_out)
+    );
+    draw_depth_energy(out, &impacts, &caption)
+}
+
+/// The title's note of runs left out: intruder still moving at the end, or run not completed.
+fn not_drawn(left_out: usize) -> String {
+    match left_out {
         0 => String::new(),
-        n => format!(", {n} not at rest (not drawn)"),
+        n => format!(", {n} not at rest or not completed (not drawn)"),
     }
 }
 
@@ -312,42 +362,59 @@ struct Impact {
     depth: f64,
     stopping: f64,
     wall: f64,
-    /// The intruder came to rest (`final_depth` and `stopping_time` are null otherwise).
-    at_rest: bool,
 }
 
-/// The runs of a sweep directory whose intruder came to rest, with the slope read from their
-/// overrides, and how many were left out because it did not (their depth is not a result).
+/// The completed runs of a sweep's table (`sweep.csv` in `dir`, as `regolith sweep` and
+/// `sweep --collect` write it) whose intruder came to rest, with the tip slope from the
+/// table's `bodies.intruder.shape.slope` column (NaN when the sweep does not vary it), and
+/// how many were left out: still moving at the end (their depth is not a result) or not
+/// completed.
 fn read_impacts(dir: &Path) -> Result<(Vec<Impact>, usize), Error> {
-    let dirs = crate::poncelet::expand_dirs(&[dir.to_path_buf()]).map_err(|e| fail("runs", e))?;
-    let mut out = Vec::new();
-    for d in dirs {
-        let text = std::fs::read_to_string(d.join("summary.json"))
-            .map_err(|e| fail(&d.display().to_string(), e))?;
-        let s: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| fail(&d.display().to_string(), e))?;
-        let slope = s["overrides"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .filter_map(|o| o.as_str()?.strip_prefix("bodies.intruder.shape.slope="))
-            .find_map(|v| v.parse::<f64>().ok())
-            .unwrap_or(f64::NAN);
-        let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
-        out.push(Impact {
-            slope,
-            energy: num(&s["impact"]["impact_energy"]) * THICKNESS,
-            depth: num(&s["impact"]["final_depth"]),
-            stopping: num(&s["impact"]["stopping_time"]),
-            wall: num(&s["wall_s"]),
-            at_rest: s["impact"]["at_rest"].as_bool() == Some(true),
-            dir: d,
+    let path = dir.join("sweep.csv");
+    let origin = path.display().to_string();
+    let mut table = csv::Reader::from_path(&path).map_err(|e| fail(&origin, e))?;
+    let header = table.headers().map_err(|e| fail(&origin, e))?.clone();
+    let column = |name: &str| header.iter().position(|h| h == name);
+    let required = |name: &str| {
+        column(name).ok_or_else(|| fail(&origin, format!("no `{name}` column: not a sweep table")))
+    };
+    let [run, status, wall, energy, depth, stopping, at_rest] = [
+        "run",
+        "status",
+        "wall_s",
+        "impact_energy",
+        "final_depth",
+        "stopping_time",
+        "at_rest",
+    ]
+    .map(required);
+    let (run, status, wall, energy, depth, stopping, at_rest) =
+        (run?, status?, wall?, energy?, depth?, stopping?, at_rest?);
+    let slope = column("bodies.intruder.shape.slope");
+    let mut kept = Vec::new();
+    let mut left_out = 0;
+    for (k, record) in table.records().enumerate() {
+        let record = record.map_err(|e| fail(&format!("{origin}: row {}", k + 2), e))?;
+        let num = |i: usize| {
+            record
+                .get(i)
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::NAN)
+        };
+        if record.get(status) != Some("completed") || record.get(at_rest) != Some("true") {
+            left_out += 1;
+            continue;
+        }
+        kept.push(Impact {
+            dir: dir.join(record.get(run).unwrap_or_default()),
+            slope: slope.map_or(f64::NAN, num),
+            energy: num(energy) * THICKNESS,
+            depth: num(depth),
+            stopping: num(stopping),
+            wall: num(wall),
         });
     }
-    let total = out.len();
-    out.retain(|r| r.at_rest);
-    let moving = total - out.len();
-    Ok((out, moving))
+    Ok((kept, left_out))
 }
 
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), Error> {
@@ -463,31 +530,43 @@ fn read_cloud(path: &Path) -> Result<Vec<Vec<(f64, f64)>>, Error> {
 mod tests {
     use super::read_impacts;
 
-    /// A run whose intruder is still moving has no final depth: the figures must leave it
-    /// out (and say so), not plot it.
+    /// A run whose intruder is still moving has no final depth, and a run not completed
+    /// has no result: the figures must leave both out (and say so), not plot them. The
+    /// table is read by column name, with a quoted velocity as the sweep writes it.
     #[test]
-    fn runs_not_at_rest_are_left_out_and_counted() {
+    fn runs_not_at_rest_or_not_completed_are_left_out_and_counted() {
         let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("sweep.csv"), "run\n").unwrap();
-        let run = |name: &str, impact: &str| {
-            let d = dir.path().join(name);
-            std::fs::create_dir(&d).unwrap();
-            let text = format!(
-                r#"{{"overrides": ["bodies.intruder.shape.slope=1.5"], "wall_s": 2.0, "impact": {impact}}}"#
-            );
-            std::fs::write(d.join("summary.json"), text).unwrap();
-        };
-        run(
-            "run_0001",
-            r#"{"impact_energy": 100.0, "at_rest": true, "final_depth": 0.3, "stopping_time": 0.25}"#,
-        );
-        run(
-            "run_0002",
-            r#"{"impact_energy": 200.0, "at_rest": false, "final_depth": null, "stopping_time": null}"#,
-        );
-        let (kept, moving) = read_impacts(dir.path()).unwrap();
-        assert_eq!(moving, 1);
+        std::fs::write(
+            dir.path().join("sweep.csv"),
+            "run,bodies.intruder.shape.slope,bodies.intruder.velocity,status,wall_s,impact_energy,final_depth,stopping_time,at_rest\n\
+             runs/run_0001,1.5,\"(0.0, -2.0)\",completed,2.0,100.0,0.3,0.25,true\n\
+             runs/run_0002,1.5,\"(0.0, -3.0)\",completed,2.0,200.0,,,false\n\
+             runs/run_0003,2.5,\"(0.0, -2.0)\",pending,,,,,\n",
+        )
+        .unwrap();
+        let (kept, left_out) = read_impacts(dir.path()).unwrap();
+        assert_eq!(left_out, 2);
         assert_eq!(kept.len(), 1);
         assert_eq!((kept[0].depth, kept[0].slope), (0.3, 1.5));
+        assert_eq!(kept[0].energy, 100.0 * super::THICKNESS);
+        assert_eq!(kept[0].dir, dir.path().join("runs/run_0001"));
+    }
+
+    /// A table without the impact columns is refused with the file named.
+    #[test]
+    fn a_table_that_is_not_a_sweep_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("sweep.csv"),
+            "run,status\nrun_0001,completed\n",
+        )
+        .unwrap();
+        let Err(e) = read_impacts(dir.path()) else {
+            panic!("accepted")
+        };
+        assert!(
+            e.to_string().contains("sweep.csv") && e.to_string().contains("wall_s"),
+            "{e}"
+        );
     }
 }

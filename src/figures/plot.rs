@@ -39,13 +39,15 @@ pub fn register_font() -> Result<()> {
     }
 }
 
-const PALETTE: [RGBColor; 6] = [
+/// Distinct line colours; seven, so that the paper's seven tip slopes each have their own.
+const PALETTE: [RGBColor; 7] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
     RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
 ];
 
 fn bounds(values: impl Iterator<Item = f64>, pad_zero: bool) -> (f64, f64) {
