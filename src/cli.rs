@@ -61,6 +61,8 @@ enum Command {
         claim: bool,
         #[command(flatten)]
         record: RecordArgs,
+        #[command(flatten)]
+        vtk: VtkArgs,
     },
     /// Run the cross product of a sweep file's parameter values (resumable), writing sweep.csv.
     ///
@@ -323,6 +325,34 @@ impl RecordArgs {
     }
 }
 
+/// VTK files for ParaView. The flags become a `Vtk(..)` scene output, as the recording
+/// flags become a `Rerun(..)` one.
+#[derive(clap::Args, Debug, Default)]
+struct VtkArgs {
+    /// Write VTK files for ParaView every SECONDS of simulated time (open <out>/vtk/points.pvd).
+    #[arg(long, value_name = "SECONDS")]
+    vtk: Option<f64>,
+    /// Also write each body's grid field (<out>/vtk/grid.pvd).
+    #[arg(long, requires = "vtk")]
+    vtk_grid: bool,
+}
+
+impl VtkArgs {
+    /// Adds the `Vtk(..)` output to `scene`, replacing the scene's own.
+    fn apply(&self, scene: &mut Scene, registries: &Rc<Registries>) -> Result<(), Error> {
+        let Some(every) = self.vtk else {
+            return Ok(());
+        };
+        let text = format!("Vtk(every: {every:?}, grid: {})", self.vtk_grid);
+        if scene.add_output(&text, "command line --vtk", registries)? {
+            eprintln!(
+                "note: --vtk replaces the scene's own Vtk(..) output (one VTK series per run)"
+            );
+        }
+        Ok(())
+    }
+}
+
 /// `plastic-strain-rate` or `plastic_strain_rate` as the RON variant `PlasticStrainRate`.
 fn camel_case(name: &str) -> String {
     name.split(['-', '_'])
@@ -363,6 +393,7 @@ pub fn main_with(app: Regolith) -> ExitCode {
             checkpoint_every,
             claim,
             record,
+            vtk,
         } => run(
             &registries,
             &scene,
@@ -374,6 +405,7 @@ pub fn main_with(app: Regolith) -> ExitCode {
                 claim,
             },
             &record,
+            &vtk,
         ),
         Command::Resume {
             dir,
@@ -542,9 +574,11 @@ fn run(
     sets: &[String],
     flags: RunFlags,
     record: &RecordArgs,
+    vtk: &VtkArgs,
 ) -> Result<(), Error> {
     let (mut scene, text) = Scene::load(path, sets, registries)?;
     record.apply(&mut scene, registries)?;
+    vtk.apply(&mut scene, registries)?;
     for w in scene.warnings() {
         eprintln!("warning: {w}");
     }

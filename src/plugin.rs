@@ -18,6 +18,7 @@ use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
 use crate::output::OutputPlugin;
 use crate::output::snapshots::Snapshots;
+use crate::output::vtk::Vtk;
 use crate::registry::Registries;
 use crate::scene::Scene;
 use crate::shape::ShapePlugin;
@@ -42,6 +43,7 @@ impl Plugin for DefaultPlugins {
         ShapePlugin::<Polygon>::default().build(r);
         ShapePlugin::<TippedIntruder>::default().build(r);
         OutputPlugin::<Snapshots>::default().build(r);
+        OutputPlugin::<Vtk>::default().build(r);
         OutputPlugin::<Impact>::default().build(r);
         OutputPlugin::<PressureFront>::default().build(r);
         OutputPlugin::<FlowField>::default().build(r);

@@ -351,12 +351,22 @@ impl Simulation {
         v
     }
 
-    /// The points of the body called `name`.
-    pub fn points(&mut self, name: &str) -> Option<&Points> {
-        let mut q = self.world.query::<(&Body, &Points)>();
+    /// Component `C` of the body called `name`.
+    fn of_body<C: Component>(&mut self, name: &str) -> Option<&C> {
+        let mut q = self.world.query::<(&Body, &C)>();
         q.iter(&self.world)
             .find(|(b, _)| b.name == name)
-            .map(|(_, p)| p)
+            .map(|(_, c)| c)
+    }
+
+    /// The points of the body called `name`.
+    pub fn points(&mut self, name: &str) -> Option<&Points> {
+        self.of_body(name)
+    }
+
+    /// The material state of each point (plastic strain, phase) of the body called `name`.
+    pub fn point_states(&mut self, name: &str) -> Option<&PointStates> {
+        self.of_body(name)
     }
 
     /// Mutable points of the body called `name` (for tests that prescribe a state).
@@ -372,10 +382,7 @@ impl Simulation {
 
     /// The nodal field of the body called `name`.
     pub fn grid_field(&mut self, name: &str) -> Option<&GridField> {
-        let mut q = self.world.query::<(&Body, &GridField)>();
-        q.iter(&self.world)
-            .find(|(b, _)| b.name == name)
-            .map(|(_, f)| f)
+        self.of_body(name)
     }
 
     pub fn particle_count(&mut self) -> usize {

@@ -16,6 +16,7 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
             "outputs=[Impact(body: \"disc\", surface: 0.6825), \
              FlowField(body: \"bed\", intruder: \"disc\", scale: 0.127, at: [0.005]), \
              FreeSurface(body: \"bed\", every: 0.005), Snapshots(every: 0.005), \
+             Vtk(every: 0.005, grid: true), \
              PressureFront(body: \"bed\", centre: (0.455, 0.6825), radius: 0.2, bins: 4, every: 0.002)]",
         ],
     );
@@ -26,6 +27,10 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
         "free_surface.csv",
         "pressure_front.csv",
         "snapshots/snapshot_00000.csv",
+        "vtk/points.pvd",
+        "vtk/grid.pvd",
+        "vtk/bed_00000.vtu",
+        "vtk/disc_grid_00000.vti",
     ] {
         assert!(dir.path().join(f).exists(), "{f} not written");
     }

@@ -113,6 +113,8 @@ fn a_failing_run_keeps_its_outputs_and_says_why() {
         "--set",
         "bodies.column.velocity=(0.0, 20.0)",
         "--quiet",
+        "--vtk",
+        "0.005",
     ]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
@@ -126,6 +128,16 @@ fn a_failing_run_keeps_its_outputs_and_says_why() {
         csv.lines().count() >= 2,
         "the rows before the fault are kept"
     );
+    // the VTK frames written before the fault are kept, and the collection lists each
+    let pvd = std::fs::read_to_string(out.join("vtk/points.pvd")).unwrap();
+    let files: Vec<&str> = pvd
+        .lines()
+        .filter_map(|l| l.split("file=\"").nth(1)?.split('"').next())
+        .collect();
+    assert!(files.len() >= 2, "{pvd}");
+    for f in files {
+        assert!(out.join("vtk").join(f).exists(), "{f} listed, not written");
+    }
 }
 
 #[test]
@@ -335,6 +347,43 @@ fn recording_options_without_a_recording_are_an_error() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("ColourOfMoney") && err.lines().count() == 1,
+        "{err}"
+    );
+}
+
+/// `--vtk SECONDS` writes ParaView's files with one flag; the grid needs `--vtk`, and a bad
+/// interval is refused in one line before anything runs.
+#[test]
+fn run_writes_vtk_files_with_one_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_path("impact_tipped_coarse");
+    let out = run_to_20_ms(
+        &scene,
+        &dir.path().join("run"),
+        None,
+        &["--vtk", "0.01", "--vtk-grid"],
+    );
+    let pvd = std::fs::read_to_string(out.join("vtk/points.pvd")).unwrap();
+    // t = 0, 0.01, 0.02 for the bed and the intruder
+    assert_eq!(pvd.matches("<DataSet ").count(), 6, "{pvd}");
+    for file in [
+        "bed_00002.vtu",
+        "intruder_00002.vtu",
+        "intruder_grid_00002.vti",
+        "grid.pvd",
+    ] {
+        assert!(out.join("vtk").join(file).exists(), "{file} not written");
+    }
+    let o = regolith(&["run", scene.to_str().unwrap(), "--vtk-grid"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--vtk <SECONDS>"));
+    let o = regolith(&["run", scene.to_str().unwrap(), "--vtk=0"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("--vtk")
+            && err.contains("every must be a positive number of seconds, got 0")
+            && err.lines().count() == 1,
         "{err}"
     );
 }

@@ -9,6 +9,7 @@
 pub mod snapshots;
 pub mod summary;
 pub mod trajectory;
+pub mod vtk;
 
 use std::fmt::Debug;
 use std::io::Write;
@@ -175,6 +176,52 @@ impl Instants {
     pub fn resume(&mut self, time: f64) -> usize {
         self.next = self.times.iter().filter(|&&t| t < time).count();
         self.next
+    }
+}
+
+/// When a file output writes: `every` seconds or `at` listed times, exactly one of them
+/// (the two optional fields of `Snapshots(..)` and `Vtk(..)`).
+#[derive(Clone, Debug)]
+pub enum Timing {
+    Every(Interval),
+    At(Instants),
+}
+
+impl Timing {
+    /// Checks that exactly one of `every` and `at` is given, and that it is valid.
+    pub fn check(every: Option<f64>, at: Option<&[f64]>) -> Result<(), String> {
+        match (every, at) {
+            (Some(every), None) if every.is_finite() && every > 0.0 => Ok(()),
+            (Some(every), None) => Err(format!(
+                "every must be a positive number of seconds, got {every}"
+            )),
+            (None, Some(at)) => check_instants(at),
+            _ => Err("give either every (an interval) or at (a list of times)".into()),
+        }
+    }
+
+    /// The timing of checked fields (see [`Timing::check`]).
+    pub fn new(every: Option<f64>, at: Option<&[f64]>) -> Self {
+        match every {
+            Some(every) => Timing::Every(Interval::new(every)),
+            None => Timing::At(Instants::new(at.unwrap_or_default().to_vec())),
+        }
+    }
+
+    /// Whether a file is due now (and, if so, moves on).
+    pub fn due(&mut self, clock: &Clock) -> bool {
+        match self {
+            Timing::Every(interval) => interval.due(clock),
+            Timing::At(instants) => instants.due(clock),
+        }
+    }
+
+    /// Re-aligns with a run resumed at `time`; returns how many files were written before.
+    pub fn resume(&mut self, time: f64) -> usize {
+        match self {
+            Timing::Every(interval) => interval.resume(time),
+            Timing::At(instants) => instants.resume(time),
+        }
     }
 }
 

@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
-use super::{Instants, Interval, Output, OutputFaults, RunDir, check_instants, write_or_fault};
+use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::sim::Clock;
 use crate::step::StepSet;
@@ -27,16 +27,9 @@ pub struct Snapshots {
     pub at: Option<Vec<f64>>,
 }
 
-/// When the next snapshot is due.
-#[derive(Debug)]
-enum When {
-    Every(Interval),
-    At(Instants),
-}
-
 #[derive(Resource, Debug)]
 struct SnapshotClock {
-    when: When,
+    when: Timing,
     count: usize,
 }
 
@@ -44,21 +37,11 @@ impl Output for Snapshots {
     const NAME: &'static str = "Snapshots";
 
     fn validate(&self) -> Result<(), String> {
-        match (self.every, &self.at) {
-            (Some(every), None) if every.is_finite() && every > 0.0 => Ok(()),
-            (Some(every), None) => Err(format!(
-                "every must be a positive number of seconds, got {every}"
-            )),
-            (None, Some(at)) => check_instants(at),
-            _ => Err("give either every (an interval) or at (a list of times)".into()),
-        }
+        Timing::check(self.every, self.at.as_deref())
     }
 
     fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        let when = match (self.every, &self.at) {
-            (Some(every), _) => When::Every(Interval::new(every)),
-            (None, at) => When::At(Instants::new(at.clone().unwrap_or_default())),
-        };
+        let when = Timing::new(self.every, self.at.as_deref());
         world.insert_resource(SnapshotClock { when, count: 0 });
         schedule.add_systems(write_snapshot.in_set(StepSet::Output));
     }
@@ -67,10 +50,7 @@ impl Output for Snapshots {
     /// `time`.
     fn resume(&self, world: &mut World, time: f64) {
         let mut clock = world.resource_mut::<SnapshotClock>();
-        clock.count = match &mut clock.when {
-            When::Every(interval) => interval.resume(time),
-            When::At(instants) => instants.resume(time),
-        };
+        clock.count = clock.when.resume(time);
     }
 }
 
@@ -81,11 +61,7 @@ fn write_snapshot(
     faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points, &PointStates)>,
 ) {
-    let due = match &mut snap.when {
-        When::Every(interval) => interval.due(&clock),
-        When::At(instants) => instants.due(&clock),
-    };
-    if !due {
+    if !snap.when.due(&clock) {
         return;
     }
     let Some(dir) = &dir.0 else { return };
