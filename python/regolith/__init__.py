@@ -87,10 +87,9 @@ class Run:
         if not summary.exists():
             raise FileNotFoundError(f"{self.path}: no summary.json (not a regolith run directory)")
         self.summary = json.loads(summary.read_text())
-        trajectory = self.path / "trajectory.csv"
-        partial = self.path / "trajectory.csv.part"
-        self.trajectory = _table(trajectory if trajectory.exists() else partial) if (
-            trajectory.exists() or partial.exists()) else {}
+        # a run still going (or killed) has only the streamed part
+        found = [p for p in ("trajectory.csv", "trajectory.csv.part") if (self.path / p).exists()]
+        self.trajectory = _table(self.path / found[0]) if found else {}
         self.snapshots = [_table(p) for p in sorted((self.path / "snapshots").glob("snapshot_*.csv"))]
 
     @property
