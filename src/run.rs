@@ -194,10 +194,8 @@ pub fn summarize(
         .bodies()
         .into_iter()
         .map(|(b, s, n)| BodySummary {
-            state_hash: format!(
-                "{:016x}",
-                sim.points(&b.name).map_or(0, |p| p.fingerprint())
-            ),
+            // every body listed by `bodies` has points
+            state_hash: sim.state_hash(&b.name).unwrap_or_default(),
             name: b.name,
             material: b.material.to_string(),
             points: n,

@@ -364,6 +364,13 @@ impl Simulation {
         self.of_body(name)
     }
 
+    /// The `state_hash` of the body called `name`, as summary.json gives it: its points'
+    /// fingerprint in 16 hex digits, equal exactly when two states are bitwise equal.
+    pub fn state_hash(&mut self, name: &str) -> Option<String> {
+        self.points(name)
+            .map(|p| format!("{:016x}", p.fingerprint()))
+    }
+
     /// The material state of each point (plastic strain, phase) of the body called `name`.
     pub fn point_states(&mut self, name: &str) -> Option<&PointStates> {
         self.of_body(name)

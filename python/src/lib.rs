@@ -53,6 +53,7 @@ fn registries() -> Rc<Registries> {
 
 /// A scene read from a file, with overrides applied and every check passed.
 #[pyclass(unsendable, module = "regolith")]
+#[derive(Clone)]
 struct Scene {
     scene: CoreScene,
     /// The text that runs (overrides applied), written to the run's scene.ron.
@@ -62,6 +63,17 @@ struct Scene {
     file: String,
     #[pyo3(get)]
     overrides: Vec<String>,
+}
+
+impl Scene {
+    /// Where the scene came from, for the run's summary.
+    fn provenance(&self) -> Provenance<'_> {
+        Provenance {
+            file: &self.file,
+            text: &self.text,
+            overrides: &self.overrides,
+        }
+    }
 }
 
 #[pymethods]
@@ -101,14 +113,9 @@ fn load_scene(path: PathBuf, overrides: Option<Vec<String>>) -> PyResult<Scene> 
 #[pyfunction]
 #[pyo3(signature = (scene, out, checkpoint_every = None))]
 fn run_to_dir(scene: &Scene, out: PathBuf, checkpoint_every: Option<u64>) -> PyResult<String> {
-    let from = Provenance {
-        file: &scene.file,
-        text: &scene.text,
-        overrides: &scene.overrides,
-    };
     let summary = run_scene(
         &scene.scene,
-        &from,
+        &scene.provenance(),
         &out,
         CheckpointEvery(checkpoint_every),
         &mut |_: &regolith::sim::Clock| {},
@@ -124,10 +131,7 @@ fn run_to_dir(scene: &Scene, out: PathBuf, checkpoint_every: Option<u64>) -> PyR
 #[pyclass(unsendable, module = "regolith")]
 struct Simulation {
     sim: CoreSimulation,
-    scene: CoreScene,
-    file: String,
-    text: String,
-    overrides: Vec<String>,
+    scene: Scene,
 }
 
 impl Simulation {
@@ -161,10 +165,7 @@ impl Simulation {
         };
         Ok(Simulation {
             sim,
-            scene: scene.scene.clone(),
-            file: scene.file.clone(),
-            text: scene.text.clone(),
-            overrides: scene.overrides.clone(),
+            scene: scene.clone(),
         })
     }
 
@@ -261,8 +262,9 @@ impl Simulation {
         names
             .into_iter()
             .map(|n| {
-                let hash = self.sim.points(&n).map_or(0, |p| p.fingerprint());
-                (n, format!("{hash:016x}"))
+                // every body listed by `bodies` has points
+                let hash = self.sim.state_hash(&n).unwrap_or_default();
+                (n, hash)
             })
             .collect()
     }
@@ -270,17 +272,13 @@ impl Simulation {
     /// The summary of the simulation as it stands, as summary.json would hold it (status
     /// "completed" once the end time is reached, else "running"), as a dict.
     fn summary<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let from = Provenance {
-            file: &self.file,
-            text: &self.text,
-            overrides: &self.overrides,
-        };
         let status = if self.sim.finished() {
             "completed"
         } else {
             "running"
         };
-        let summary = summarize(&mut self.sim, &self.scene, &from, 0.0, status, None);
+        let from = self.scene.provenance();
+        let summary = summarize(&mut self.sim, &self.scene.scene, &from, 0.0, status, None);
         let text = serde_json::to_string(&summary).map_err(run_error)?;
         py.import("json")?.call_method1("loads", (text,))
     }
@@ -288,7 +286,7 @@ impl Simulation {
     fn __repr__(&self) -> String {
         format!(
             "<regolith.Simulation {:?} at t = {} s, step {}>",
-            self.scene.name,
+            self.scene.scene.name,
             self.sim.clock().time,
             self.sim.clock().step
         )

@@ -82,9 +82,7 @@ impl VtkField {
         let name = self.name();
         let scalar = |v: &[f64]| xml::Array::f64(name, 1, v.iter().copied());
         match self {
-            VtkField::Velocity => {
-                xml::Array::f64(name, 3, p.velocity.iter().flat_map(|v| [v.x, v.y, 0.0]))
-            }
+            VtkField::Velocity => xml::Array::vectors(name, &p.velocity),
             VtkField::Pressure => xml::Array::f64(name, 1, p.stress.iter().map(|s| s.pressure())),
             VtkField::ShearStress => {
                 xml::Array::f64(name, 1, p.stress.iter().map(|s| s.equivalent_shear()))
@@ -255,9 +253,8 @@ fn write_frame(
     };
     for ((body, p, st, field), stem) in sorted.into_iter().zip(&stems) {
         let arrays: Vec<_> = state.fields.iter().map(|f| f.array(body, p, st)).collect();
-        let positions: Vec<[f64; 2]> = p.position.iter().map(|x| x.to_array()).collect();
         let file = format!("{stem}_{frame:05}.vtu");
-        let bytes = xml::unstructured_points(clock.time, &positions, &arrays);
+        let bytes = xml::unstructured_points(clock.time, &p.position, &arrays);
         write_or_fault(&folder.join(&file), &bytes, &clock, &faults);
         state.points.push(Entry {
             time: clock.time,
@@ -290,14 +287,11 @@ fn write_frame(
 /// One body's nodal field: mass, velocity, momentum and the nodal force of the step, and
 /// the total contact force on the body as field data.
 fn grid_file(time: f64, lattice: &xml::Lattice, field: &GridField) -> Vec<u8> {
-    let vector = |name: &str, v: &[glam::DVec2]| {
-        xml::Array::f64(name, 3, v.iter().flat_map(|v| [v.x, v.y, 0.0]))
-    };
     let arrays = [
         xml::Array::f64("mass", 1, field.mass.iter().copied()),
-        vector("velocity", &field.velocity),
-        vector("momentum", &field.momentum),
-        vector("force", &field.force),
+        xml::Array::vectors("velocity", &field.velocity),
+        xml::Array::vectors("momentum", &field.momentum),
+        xml::Array::vectors("force", &field.force),
     ];
     let contact = [field.contact_force.x, field.contact_force.y, 0.0];
     xml::image_data(time, lattice, &arrays, &[("contact_force", &contact)])

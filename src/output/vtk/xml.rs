@@ -9,6 +9,8 @@
 
 use std::fmt::Write as _;
 
+use glam::DVec2;
+
 /// One named array of a file's point data (or of its coordinates).
 pub struct Array {
     pub name: String,
@@ -22,6 +24,11 @@ impl Array {
     /// `components` values per point, flattened point by point.
     pub fn f64(name: &str, components: usize, values: impl IntoIterator<Item = f64>) -> Array {
         Array::from_bytes(name, "Float64", components, values, f64::to_le_bytes)
+    }
+
+    /// 2D vectors as VTK's three components (z = 0).
+    pub fn vectors(name: &str, v: &[DVec2]) -> Array {
+        Array::f64(name, 3, v.iter().flat_map(|v| [v.x, v.y, 0.0]))
     }
 
     pub fn i32(name: &str, values: impl IntoIterator<Item = i32>) -> Array {
@@ -109,8 +116,8 @@ fn field_data(time: f64, fields: &[(&str, &[f64])]) -> String {
     s
 }
 
-/// A `.vtu` of `positions` (x, y; z = 0) as vertex cells, with `arrays` as point data.
-pub fn unstructured_points(time: f64, positions: &[[f64; 2]], arrays: &[Array]) -> Vec<u8> {
+/// A `.vtu` of `positions` (z = 0) as vertex cells, with `arrays` as point data.
+pub fn unstructured_points(time: f64, positions: &[DVec2], arrays: &[Array]) -> Vec<u8> {
     let n = positions.len();
     let mut appended = Appended::default();
     let mut body = format!(
@@ -119,11 +126,7 @@ pub fn unstructured_points(time: f64, positions: &[[f64; 2]], arrays: &[Array]) 
     );
     body.push_str(&appended.tags(arrays));
     body.push_str("</PointData>\n<Points>\n");
-    let coords = Array::f64(
-        "position",
-        3,
-        positions.iter().flat_map(|&[x, y]| [x, y, 0.0]),
-    );
+    let coords = Array::vectors("position", positions);
     body.push_str(&appended.tag(&coords));
     body.push_str("</Points>\n<Cells>\n");
     let cells = [
@@ -255,7 +258,7 @@ mod tests {
     fn appended_offsets_point_at_each_array_header() {
         let file = unstructured_points(
             0.5,
-            &[[1.0, 2.0], [3.0, 4.0]],
+            &[DVec2::new(1.0, 2.0), DVec2::new(3.0, 4.0)],
             &[Array::f64("pressure", 1, [7.0, 8.0])],
         );
         let text = String::from_utf8_lossy(&file);
