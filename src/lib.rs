@@ -10,13 +10,9 @@
 
 pub mod body;
 pub mod checkpoint;
-pub mod claim;
-pub mod cli;
-pub mod collect;
 pub mod contact;
 pub mod diagnostics;
 pub mod error;
-pub mod figures;
 pub mod fill;
 pub mod flow_field;
 pub mod free_surface;
@@ -27,9 +23,7 @@ pub mod integration;
 pub mod linefit;
 pub mod material;
 pub mod output;
-pub mod plan;
 pub mod plugin;
-pub mod poncelet;
 pub mod registry;
 pub mod run;
 pub mod scene;
@@ -37,10 +31,6 @@ pub mod shape;
 pub mod sim;
 pub mod step;
 pub mod stress;
-pub mod study;
-pub mod sweep;
-pub mod verify;
-pub mod workers;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.
 pub use bevy_ecs;

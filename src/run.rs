@@ -109,6 +109,11 @@ pub fn request_stop() -> bool {
     STOP.swap(true, Ordering::SeqCst)
 }
 
+/// This machine's host name, as `summary.json` and claims on run directories record it.
+pub fn host() -> String {
+    gethostname::gethostname().to_string_lossy().into_owned()
+}
+
 /// How a run's loop ended.
 enum Ending {
     Finished,
@@ -248,7 +253,7 @@ pub fn summarize(
         cell_size: grid.cell_size,
         gravity: scene.gravity.to_array(),
         threads: rayon::current_num_threads(),
-        host: crate::claim::host(),
+        host: host(),
         regolith_version: env!("CARGO_PKG_VERSION").to_string(),
         wall_s,
         particle_steps_per_s: if wall_s > 0.0 {

@@ -1,5 +1,9 @@
-//! The `regolith` command: the built-in plugins and the Rerun recorder (see `regolith::cli`).
+//! The `regolith` command: the built-in plugins and, with the default `rerun` feature, the
+//! Rerun recorder (see [`regolith_cli::main_with`]).
 
 fn main() -> std::process::ExitCode {
-    regolith::cli::main_with(regolith::Regolith::default().add_plugin(regolith_rerun::RerunPlugin))
+    let app = regolith::Regolith::default();
+    #[cfg(feature = "rerun")]
+    let app = app.add_plugin(regolith_rerun::RerunPlugin);
+    regolith_cli::main_with(app)
 }

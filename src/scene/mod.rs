@@ -6,7 +6,7 @@
 //! (reported with the body's name and the line it is declared on).
 
 mod check;
-pub(crate) mod overrides;
+pub mod overrides;
 mod preset;
 
 pub use preset::Preset;

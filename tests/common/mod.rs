@@ -5,11 +5,22 @@ use std::path::PathBuf;
 
 use regolith::{Regolith, Scene, Simulation};
 
+/// The repository's root: these helpers serve the engine's tests (root package) and the
+/// lab's (`lab/`), which include this file by path.
+pub fn repository() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if dir.join("scenes").is_dir() {
+        dir
+    } else {
+        dir.parent()
+            .expect("lab/ sits in the repository")
+            .to_path_buf()
+    }
+}
+
 /// Path of a shipped scene.
 pub fn scene_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(format!("{name}.ron"))
+    repository().join("scenes").join(format!("{name}.ron"))
 }
 
 /// Loads a shipped scene with `--set`-style overrides.

@@ -2,5 +2,5 @@
 //! ships so its scenes can be run and checked.
 
 fn main() -> std::process::ExitCode {
-    regolith::cli::main_with(regolith::Regolith::default().add_plugin(ellipse_shape::EllipsePlugin))
+    regolith_cli::main_with(regolith::Regolith::default().add_plugin(ellipse_shape::EllipsePlugin))
 }

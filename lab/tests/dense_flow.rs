@@ -5,7 +5,7 @@
 //! volumes still said `rho = rho_c`, and most of it disconnected (docs/numerics.md,
 //! "Dense flow"). A test of a few hundred steps cannot see that; these run 10^5 steps and
 //! more on a coarse grid (10 cells per depth; the resolution study is in
-//! docs/VALIDATION.md, `cargo run --release --example dense_flow`).
+//! docs/VALIDATION.md, `cargo run --release -p regolith-lab --example dense_flow`).
 //!
 //! They run with `transfer: Apic`, which holds these flows; with FLIP the steady-flow test
 //! fails within 1 s, and with the default affine FLIP within about 5 s (the cell-averaged
@@ -14,7 +14,7 @@
 //! and the collapses depend on the time step; until one setting does both, these tests say
 //! which transfer holds a dense flow, and the issue stays open.
 
-use regolith::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration, ps1, run};
+use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration, ps1, run};
 
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth) and APIC, run
 /// for `end` seconds from the lithostatic state, moving with `profile` if given; `each`
@@ -25,7 +25,7 @@ fn run_chute(
     profile: Option<&Bagnold>,
     each: impl FnMut(f64, &ChuteState),
 ) -> u64 {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     run(
         &path,
         deg,

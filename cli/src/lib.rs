@@ -15,17 +15,17 @@ use std::time::Duration;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::Regolith;
-use crate::error::{Error, SceneError};
-use crate::output::summary::Summary;
-use crate::plan::{BatchFile, Layout, SlurmOptions, write_plan};
-use crate::registry::Registries;
-use crate::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
-use crate::scene::{InitialStress, Preset, Scene, TimeStep};
-use crate::sim::{Clock, Simulation};
-use crate::study::Study;
-use crate::sweep::Sweep;
-use crate::workers::run_local;
+use regolith::Regolith;
+use regolith::error::{Error, SceneError};
+use regolith::output::summary::Summary;
+use regolith::registry::Registries;
+use regolith::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
+use regolith::scene::{InitialStress, Preset, Scene, TimeStep};
+use regolith::sim::{Clock, Simulation};
+use regolith_lab::plan::{BatchFile, Layout, SlurmOptions, write_plan};
+use regolith_lab::study::Study;
+use regolith_lab::sweep::Sweep;
+use regolith_lab::workers::run_local;
 
 #[derive(Parser)]
 #[command(
@@ -372,7 +372,7 @@ pub fn main_with(app: Regolith) -> ExitCode {
     // A first SIGINT / SIGTERM lets every run finish its step and save itself; a second
     // one stops at once. Without a handler (it could not be installed) a signal kills.
     let handler = ctrlc::set_handler(|| {
-        if crate::run::request_stop() {
+        if regolith::run::request_stop() {
             eprintln!("\nstopping now, without saving");
             std::process::exit(130);
         }
@@ -445,8 +445,8 @@ pub fn main_with(app: Regolith) -> ExitCode {
             jobs,
             from,
         } => match from {
-            Some(dir) => crate::figures::depth_energy_from(&dir, &out),
-            None => crate::figures::make_figures(
+            Some(dir) => regolith_lab::figures::depth_energy_from(&dir, &out),
+            None => regolith_lab::figures::make_figures(
                 &registries,
                 &scenes,
                 &runs,
@@ -563,7 +563,7 @@ fn set_shares(timings: &std::collections::BTreeMap<String, f64>) -> String {
 struct RunFlags {
     quiet: bool,
     checkpoints: CheckpointEvery,
-    /// Claim the output directory first (`crate::claim`).
+    /// Claim the output directory first (`regolith_lab::claim`).
     claim: bool,
 }
 
@@ -585,10 +585,10 @@ fn run(
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     let mut claim = None;
     if flags.claim {
-        use crate::claim::{Claimed, claim as take};
+        use regolith_lab::claim::{Claimed, claim as take};
         // Done: completed from this very scene text (a changed scene is run again).
         let done = || {
-            crate::sweep::read_summary(&out).is_some_and(|s| s["status"] == "completed")
+            regolith_lab::sweep::read_summary(&out).is_some_and(|s| s["status"] == "completed")
                 && std::fs::read_to_string(out.join("scene.ron")).is_ok_and(|t| t == text)
         };
         match take(&out, done)
@@ -698,7 +698,7 @@ fn plan_batch(
 }
 
 fn collect_plan(dir: &Path, partial: bool) -> Result<(), Error> {
-    let found = crate::collect::collect(dir)?;
+    let found = regolith_lab::collect::collect(dir)?;
     println!(
         "{}: {} of {} runs completed; table in {}",
         dir.display(),
@@ -760,7 +760,7 @@ fn fit(
     out: Option<PathBuf>,
     window: Option<f64>,
 ) -> Result<(), Error> {
-    use crate::poncelet::{
+    use regolith_lab::poncelet::{
         Derivatives, MIN_SPEEDS, default_depths, default_table, expand_dirs, fit, load_run,
         refuse_duplicates, to_csv,
     };
@@ -796,7 +796,7 @@ fn fit(
         )));
     }
     let out = table;
-    crate::output::write_atomic(&out, to_csv(&points).as_bytes())
+    regolith::output::write_atomic(&out, to_csv(&points).as_bytes())
         .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;
     println!(
         "{} runs, {} of {} depths fitted; table in {}",

@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::linefit::line_fit;
+use regolith::linefit::line_fit;
 
 /// An interpolating cubic spline through `(t_i, y_i)` (strictly increasing `t`) with
 /// not-a-knot ends: the third derivative is continuous at the second and the next-to-last

@@ -25,12 +25,12 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, SceneError};
-use crate::output::write_atomic;
-use crate::registry::Registries;
-use crate::scene::Scene;
 use crate::study::Study;
 use crate::sweep::{Planned, read_summary};
+use regolith::error::{Error, SceneError};
+use regolith::output::write_atomic;
+use regolith::registry::Registries;
+use regolith::scene::Scene;
 
 /// `plan.json`.
 #[derive(Debug, Serialize, Deserialize)]
@@ -115,7 +115,7 @@ fn resolved_text(
     if scene.preset.is_none() {
         return Ok((scene, text));
     }
-    let text = crate::scene::overrides::set_in_text(&text, "preset=None")
+    let text = regolith::scene::overrides::set_in_text(&text, "preset=None")
         .map_err(|e| SceneError::file(&scene_path.display().to_string(), format!("preset: {e}")))?;
     let scene = Scene::parse(&text, &scene_path.display().to_string(), registries)?;
     Ok((scene, text))
@@ -124,7 +124,7 @@ fn resolved_text(
 /// Estimated wall time of `scene` on one thread (s): steps at its first time step, times
 /// its particles, at [`ASSUMED_RATE`].
 fn estimate(scene: &Scene) -> f64 {
-    let mut sim = crate::sim::Simulation::new(scene);
+    let mut sim = regolith::sim::Simulation::new(scene);
     let (dt, _) = sim.next_time_step();
     let steps = (scene.time.end / dt).ceil();
     steps * sim.particle_count() as f64 / ASSUMED_RATE

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use regolith::poncelet::{Derivatives, default_depths, fit, load_run, refuse_duplicates};
+use regolith_lab::poncelet::{Derivatives, default_depths, fit, load_run, refuse_duplicates};
 
 const MASS: f64 = 73.0;
 const G: f64 = 9.81;
@@ -115,7 +115,7 @@ fn a_window_fit_sees_through_grid_crossing_pulses() {
         })
         .collect();
     let depths: Vec<f64> = (0..10).map(|k| 0.04 + 0.015 * k as f64).collect();
-    let error = |points: &[regolith::poncelet::PonceletPoint]| {
+    let error = |points: &[regolith_lab::poncelet::PonceletPoint]| {
         points
             .iter()
             .map(|p| (p.f / f_true(p.depth) - 1.0).abs())
@@ -147,7 +147,7 @@ fn a_run_that_failed_is_refused() {
 }
 
 /// Runs at `speeds`, loaded.
-fn runs_at(root: &Path, speeds: &[f64]) -> Vec<regolith::poncelet::PonceletRun> {
+fn runs_at(root: &Path, speeds: &[f64]) -> Vec<regolith_lab::poncelet::PonceletRun> {
     speeds
         .iter()
         .enumerate()

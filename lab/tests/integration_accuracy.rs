@@ -1,11 +1,12 @@
 //! Accuracy of the shape-function schemes on whole runs (issue: integration schemes).
-//! The measured tables are in docs/ACCURACY.md (`cargo run --release --example accuracy`).
+//! The measured tables are in docs/ACCURACY.md (`cargo run --release -p regolith-lab --example accuracy`).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::scene;
 use regolith::material::elastic::p_wave_modulus;
-use regolith::verify::{bar_mode_period, largest_stress};
+use regolith_lab::verify::{bar_mode_period, largest_stress};
 
 fn bar_sets(cells: usize, integration: &str) -> Vec<String> {
     let h = 1.2 / cells as f64;

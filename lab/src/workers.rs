@@ -12,12 +12,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::claim::{Claimed, claim};
 use crate::collect::collect_plan;
-use crate::error::Error;
 use crate::plan::{BatchFile, Layout, PlanFile, PlannedRun, SlurmOptions, write_plan};
-use crate::registry::Registries;
-use crate::run::{CheckpointEvery, Provenance, run_scene};
-use crate::scene::Scene;
 use crate::sweep::read_summary;
+use regolith::error::Error;
+use regolith::registry::Registries;
+use regolith::run::{CheckpointEvery, Provenance, run_scene};
+use regolith::scene::Scene;
 
 /// Runs the sweep or study `batch` (read from `path`) into `out`: writes its plan there
 /// (runs at the top, `Layout::Local`) and runs it, `jobs` runs at once (default: the
@@ -142,7 +142,7 @@ fn run_one(
             &from,
             &out,
             CheckpointEvery(None),
-            &mut |_: &crate::sim::Clock| claim.heartbeat(),
+            &mut |_: &regolith::sim::Clock| claim.heartbeat(),
         )
     })?;
     Ok(Claimed::Mine(claim))

@@ -8,14 +8,14 @@
 //! the disconnected fraction at the end.
 //!
 //! ```text
-//! cargo run --release --example column_rest -- ASPECTS CELL [--set k=v]...
-//! cargo run --release --example column_rest -- 0.5,1,2,4 0.01
-//! cargo run --release --example column_rest -- 0.5,1,2,4 0.005 --set transfer=Apic
+//! cargo run --release -p regolith-lab --example column_rest -- ASPECTS CELL [--set k=v]...
+//! cargo run --release -p regolith-lab --example column_rest -- 0.5,1,2,4 0.01
+//! cargo run --release -p regolith-lab --example column_rest -- 0.5,1,2,4 0.005 --set transfer=Apic
 //! ```
 
 use regolith::body::{Phase, PointStates, Points};
-use regolith::verify::quantile;
 use regolith::{Regolith, Scene, Simulation};
+use regolith_lab::verify::quantile;
 
 const WIDTH: f64 = 0.1;
 const REST_SPEED: f64 = 0.01;
@@ -48,7 +48,7 @@ fn main() {
         .map(|w| w[1].clone())
         .collect();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes/granular_column_collapse_a2.ron");
+        .join("../scenes/granular_column_collapse_a2.ron");
     println!(
         "| a | cells | points | at rest (s) | 5 sqrt(H0/g) (s) | runout (Lf-L0)/L0 | Lube et al. | final height / H0 | disconnected at end | wall (s) |"
     );

@@ -3,15 +3,16 @@
 //! setting, measures every row against the named reference, marks the frontier, draws the
 //! plot, and skips finished runs when run again.
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use std::rc::Rc;
 use std::sync::Mutex;
 
 use regolith::Regolith;
-use regolith::plan::BatchFile;
-use regolith::study::Study;
-use regolith::workers::run_local;
+use regolith_lab::plan::BatchFile;
+use regolith_lab::study::Study;
+use regolith_lab::workers::run_local;
 
 fn write_study(dir: &std::path::Path) -> std::path::PathBuf {
     let scene = common::scene_path("impact_tipped_coarse");

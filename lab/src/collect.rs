@@ -9,9 +9,9 @@
 
 use std::path::Path;
 
-use crate::error::{Error, SceneError};
 use crate::plan::{PlanFile, digest, read_plan};
 use crate::sweep::read_summary;
+use regolith::error::{Error, SceneError};
 
 /// Where a planned run stands.
 #[derive(Clone, Debug, PartialEq)]

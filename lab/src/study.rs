@@ -31,11 +31,11 @@ use std::rc::Rc;
 use serde::{Deserialize, Serialize};
 
 use crate::collect::{RunState, State};
-use crate::error::{Error, SceneError};
-use crate::output::write_atomic;
 use crate::plan::{BatchFile, PlanFile};
-use crate::registry::Registries;
 use crate::sweep::{Planned, beside, field};
+use regolith::error::{Error, SceneError};
+use regolith::output::write_atomic;
+use regolith::registry::Registries;
 
 /// A study file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -419,7 +419,7 @@ impl BatchFile for Study {
     /// The measures come from the scene's Impact output: a scene without one is refused.
     fn check(&self, path: &Path, registries: &Rc<Registries>) -> Result<(), Error> {
         let scene = beside(path, &self.scene);
-        let (base, _) = crate::scene::Scene::load(&scene, &self.set, registries)?;
+        let (base, _) = regolith::scene::Scene::load(&scene, &self.set, registries)?;
         if base.outputs.iter().any(|o| o.name() == "Impact") {
             return Ok(());
         }

@@ -19,7 +19,9 @@ fn every_shipped_scene_loads_and_builds() {
 
 /// The `.ron` files of a shipped directory, sorted.
 fn shipped(dir: &str) -> Vec<std::path::PathBuf> {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(dir);
     let mut paths: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -38,20 +40,20 @@ fn every_run_of_every_shipped_sweep_and_study_loads() {
     let mut checked = 0;
     let mut check = |batch: &std::path::Path, scene: &str, sets: &[String]| {
         // Resolved as `regolith sweep` and `regolith study` resolve it.
-        let scene = regolith::sweep::beside(batch, scene);
+        let scene = regolith_lab::sweep::beside(batch, scene);
         Scene::load(&scene, sets, &registries)
             .unwrap_or_else(|e| panic!("{}: {e}", batch.display()));
         checked += 1;
     };
     for path in shipped("sweeps") {
-        let sweep = <regolith::sweep::Sweep as regolith::plan::BatchFile>::load(&path)
+        let sweep = <regolith_lab::sweep::Sweep as regolith_lab::plan::BatchFile>::load(&path)
             .unwrap_or_else(|e| panic!("{e}"));
         for run in sweep.plan() {
             check(&path, &sweep.scene, &run.sets);
         }
     }
     for path in shipped("studies") {
-        let study = <regolith::study::Study as regolith::plan::BatchFile>::load(&path)
+        let study = <regolith_lab::study::Study as regolith_lab::plan::BatchFile>::load(&path)
             .unwrap_or_else(|e| panic!("{e}"));
         for run in study.plan().0 {
             check(&path, &study.scene, &run.sets);

@@ -26,9 +26,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::collect::{RunState, State};
-use crate::error::SceneError;
-use crate::output::write_atomic;
 use crate::plan::{BatchFile, PlanFile};
+use regolith::error::SceneError;
+use regolith::output::write_atomic;
 
 /// A sweep file.
 #[derive(Clone, Debug, Deserialize)]
@@ -64,14 +64,16 @@ pub(crate) fn load_batch_file<T: serde::de::DeserializeOwned>(
     let origin = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::file(&origin, format!("cannot read the {what}: {e}")))?;
-    let batch: T = crate::scene::ron_options().from_str(&text).map_err(|e| {
-        SceneError::at(
-            &origin,
-            e.span.start.line,
-            e.span.start.col,
-            e.code.to_string(),
-        )
-    })?;
+    let batch: T = regolith::scene::ron_options()
+        .from_str(&text)
+        .map_err(|e| {
+            SceneError::at(
+                &origin,
+                e.span.start.line,
+                e.span.start.col,
+                e.code.to_string(),
+            )
+        })?;
     if jobs(&batch) == Some(0) {
         return Err(SceneError::file(&origin, "jobs must be at least 1"));
     }
@@ -128,7 +130,7 @@ impl Sweep {
 }
 
 /// A run directory's `summary.json`, if it holds one that parses.
-pub(crate) fn read_summary(dir: &Path) -> Option<serde_json::Value> {
+pub fn read_summary(dir: &Path) -> Option<serde_json::Value> {
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
     serde_json::from_str(&text).ok()
 }

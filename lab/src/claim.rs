@@ -23,6 +23,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
 
+use regolith::run::host;
+
 /// How often a running claim renews its heartbeat.
 pub const HEARTBEAT: Duration = Duration::from_secs(30);
 /// How old a heartbeat may be before another host may take the claim over.
@@ -48,11 +50,6 @@ pub struct Claim {
 
 /// The name of a claim file in a run directory.
 const FILE: &str = "claim";
-
-/// This machine's host name, as claims and `summary.json` record it.
-pub fn host() -> String {
-    gethostname::gethostname().to_string_lossy().into_owned()
-}
 
 /// This process as a claim holder: `host pid`.
 fn me() -> String {

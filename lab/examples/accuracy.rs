@@ -2,15 +2,15 @@
 //! spurious stress of a translating block, and the largest stable CFL number.
 //!
 //! ```text
-//! cargo run --release --example accuracy
+//! cargo run --release -p regolith-lab --example accuracy
 //! ```
 
 use std::path::Path;
 use std::time::Instant;
 
 use regolith::material::elastic::p_wave_modulus;
-use regolith::verify::{bar_mode_period, front_speed, largest_stress};
 use regolith::{Regolith, Scene, Simulation};
+use regolith_lab::verify::{bar_mode_period, front_speed, largest_stress};
 
 /// The variants compared: (integration, update).
 const VARIANTS: [(&str, &str); 4] = [
@@ -22,7 +22,7 @@ const VARIANTS: [(&str, &str); 4] = [
 
 fn load(name: &str, sets: &[String]) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
+        .join("../scenes")
         .join(format!("{name}.ron"));
     match Scene::load(&path, sets, &Regolith::default().registries()) {
         Ok((scene, _)) => scene,

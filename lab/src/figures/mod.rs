@@ -15,14 +15,14 @@ pub mod plot;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-use crate::error::{Error, SceneError};
 use crate::plan::BatchFile;
 use crate::poncelet::{Derivatives, fit, load_run};
-use crate::registry::Registries;
-use crate::run::{CheckpointEvery, Provenance, run_scene};
-use crate::scene::Scene;
 use crate::sweep::Sweep;
 use crate::workers::run_local;
+use regolith::error::{Error, SceneError};
+use regolith::registry::Registries;
+use regolith::run::{CheckpointEvery, Provenance, run_scene};
+use regolith::scene::Scene;
 
 use plot::Series;
 

@@ -1,5 +1,5 @@
 //! Measurements on verification problems with analytic answers, shared by the test suite
-//! and the accuracy study (`cargo run --release --example accuracy`).
+//! and the accuracy study (`cargo run --release -p regolith-lab --example accuracy`).
 //!
 //! Each function runs a prepared scene and returns the measured quantity; comparing it with
 //! the analytic value (and choosing a tolerance) is the caller's business.
@@ -8,10 +8,10 @@ pub mod chute;
 
 use std::f64::consts::FRAC_PI_2;
 
-use crate::error::Fault;
-use crate::linefit::line_fit;
-use crate::scene::Scene;
-use crate::sim::Simulation;
+use regolith::error::Fault;
+use regolith::linefit::line_fit;
+use regolith::scene::Scene;
+use regolith::sim::Simulation;
 
 /// The `q` quantile of `values` (0 <= q <= 1): the sorted value at index `floor(q (n - 1))`,
 /// no interpolation; NaN for no values.

@@ -1,17 +1,17 @@
 //! The long dense-flow validation (docs/VALIDATION.md, "Steady chute flow"): the shipped
 //! chute scene at several angles and resolutions, started in its lithostatic state and
 //! moving with the analytic mu(I) profile where there is one, measured every `every`
-//! seconds against that profile (`verify::chute::run`, as tests/dense_flow.rs).
+//! seconds against that profile (`verify::chute::run`, as lab/tests/dense_flow.rs).
 //!
 //! ```text
-//! cargo run --release --example dense_flow -- ANGLES CELLS_PER_DEPTH END [EVERY] [--set k=v]...
-//! cargo run --release --example dense_flow -- 20,25,28 10,20 25 1
+//! cargo run --release -p regolith-lab --example dense_flow -- ANGLES CELLS_PER_DEPTH END [EVERY] [--set k=v]...
+//! cargo run --release -p regolith-lab --example dense_flow -- 20,25,28 10,20 25 1
 //! ```
 //! Prints one row per moment (top, volume ratio, disconnected fractions, mean speed,
 //! profile error, rms speed normal to the bed), the last at the end of the run; every run is at the default numerical settings
 //! unless `--set` says otherwise.
 
-use regolith::verify::chute::{Bagnold, ChuteState, DEPTH, ps1, run};
+use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, ps1, run};
 
 fn list(arg: &str) -> Vec<f64> {
     arg.split(',')
@@ -35,7 +35,7 @@ fn main() {
         .filter(|w| w[0] == "--set")
         .map(|w| w[1].clone())
         .collect();
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/chute_flow.ron");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     let material = ps1();
     println!(
         "| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | wall (s) |"

@@ -19,12 +19,12 @@ use std::path::Path;
 
 use glam::DVec2;
 
-use crate::body::{Phase, PointStates, Points};
-use crate::material::granular::TransPhase;
-use crate::plugin::Regolith;
-use crate::scene::Scene;
-use crate::sim::Simulation;
-use crate::stress::Stress;
+use regolith::body::{Phase, PointStates, Points};
+use regolith::material::granular::TransPhase;
+use regolith::plugin::Regolith;
+use regolith::scene::Scene;
+use regolith::sim::Simulation;
+use regolith::stress::Stress;
 
 /// Depth of the layer in `scenes/chute_flow.ron` (m); `run` checks it against the scene.
 pub const DEPTH: f64 = 0.1;
@@ -82,7 +82,7 @@ pub fn least_acceleration(material: &TransPhase, angle: f64, gravity: f64) -> f6
 
 /// The paper's PS-1 photoelastic discs (SCIENCE.md 6), as the chute scenes use them.
 pub fn ps1() -> TransPhase {
-    let (shear, bulk) = crate::material::elastic::moduli(2.0e7, 0.45);
+    let (shear, bulk) = regolith::material::elastic::moduli(2.0e7, 0.45);
     TransPhase {
         shear,
         bulk,

@@ -1,11 +1,12 @@
 //! Verification of the step on elastic problems with analytic answers (issue: foundation).
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::scene;
 use regolith::Simulation;
 use regolith::material::elastic::p_wave_modulus;
-use regolith::verify::{bar_mode_period, front_speed};
+use regolith_lab::verify::{bar_mode_period, front_speed};
 
 const RHO: f64 = 1000.0;
 const E: f64 = 1.0e7;
