@@ -1,8 +1,8 @@
 //! Criterion benchmarks of the step's heavy systems and of whole steps, on the benchmark
 //! scenes (30 k points, 100 x 100 cells). Run: cargo bench --bench step -- --quick
 
-use regolith::bevy_ecs::system::RunSystemOnce;
 use criterion::{Criterion, criterion_group, criterion_main};
+use regolith::bevy_ecs::system::RunSystemOnce;
 use regolith::contact::frictional;
 use regolith::integration::{CpdiFixed, Footprint, Scheme};
 use regolith::material::granular::MuI;
@@ -15,7 +15,8 @@ use regolith::{Regolith, Scene, Simulation};
 const PS1: &str = "bodies.bed.material=MuI(youngs_modulus: 2.0e7, poisson_ratio: 0.45, grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, mu_s: 0.32, mu_2: 0.598, i_0: 0.278)";
 
 fn scene(name: &str, sets: &[&str]) -> Scene {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.ron"));
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.ron"));
     let mut sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     sets.push("time.end=1.0".to_string());
     Scene::load(&path, &sets, &Regolith::default().registries())

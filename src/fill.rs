@@ -7,7 +7,7 @@
 use glam::DVec2;
 
 use crate::grid::GridGeometry;
-use crate::shape::ShapeSpec;
+use crate::shape::Shape;
 
 /// The positions of a filled shape.
 pub struct Lattice {
@@ -16,7 +16,7 @@ pub struct Lattice {
 }
 
 /// Lattice points of spacing `h / points_per_cell` that lie inside `shape` and the domain.
-pub fn fill(shape: &dyn ShapeSpec, grid: &GridGeometry, points_per_cell: usize) -> Lattice {
+pub fn fill(shape: &dyn Shape, grid: &GridGeometry, points_per_cell: usize) -> Lattice {
     let spacing = grid.cell_size / points_per_cell as f64;
     let (lo, hi) = shape.bounds();
     let (dmin, dmax) = (grid.origin, grid.max());

@@ -17,6 +17,8 @@ use serde::Deserialize;
 
 use crate::body::{Body, BodyState, Points};
 use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -53,9 +55,8 @@ pub struct FlowFields {
     pub fields: Vec<NormalisedField>,
 }
 
-impl Output for FlowField {
+impl Item for FlowField {
     const NAME: &'static str = "FlowField";
-
     fn validate(&self) -> Result<(), String> {
         if !(self.scale.is_finite() && self.scale > 0.0) {
             return Err(format!(
@@ -69,14 +70,16 @@ impl Output for FlowField {
         }
         Ok(())
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(FlowFields {
+impl Output for FlowField {
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(FlowFields {
             spec: self.clone(),
             when: Instants::new(self.at.clone()),
             fields: Vec::new(),
         });
-        schedule.add_systems(record_flow_field.in_set(StepSet::Output));
+        sim.add_systems(StepSet::Output, record_flow_field);
     }
 
     /// Fields due before `time` were written by the interrupted run.

@@ -14,6 +14,8 @@ use serde::Deserialize;
 use crate::body::{Body, Points};
 use crate::grid::GridGeometry;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -39,9 +41,8 @@ pub struct SurfaceRecord {
     pub heights: Vec<Vec<f64>>,
 }
 
-impl Output for FreeSurface {
+impl Item for FreeSurface {
     const NAME: &'static str = "FreeSurface";
-
     fn validate(&self) -> Result<(), String> {
         if self.every.is_finite() && self.every > 0.0 {
             Ok(())
@@ -49,9 +50,11 @@ impl Output for FreeSurface {
             Err(format!("every must be a positive time, got {}", self.every))
         }
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(SurfaceRecord {
+impl Output for FreeSurface {
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(SurfaceRecord {
             spec: self.clone(),
             interval: Interval::new(self.every),
             full: 0,
@@ -59,7 +62,7 @@ impl Output for FreeSurface {
             times: Vec::new(),
             heights: Vec::new(),
         });
-        schedule.add_systems(record_surface.in_set(StepSet::Output));
+        sim.add_systems(StepSet::Output, record_surface);
     }
 }
 

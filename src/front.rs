@@ -19,6 +19,8 @@ use serde::{Deserialize, Serialize};
 use crate::body::{Body, Points};
 use crate::linefit::line_fit;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -115,9 +117,8 @@ pub fn half_rise(times: &[f64], values: &[f64]) -> Option<f64> {
     Some(times[k - 1] + (times[k] - times[k - 1]) * (level - v0) / (v1 - v0))
 }
 
-impl Output for PressureFront {
+impl Item for PressureFront {
     const NAME: &'static str = "PressureFront";
-
     fn validate(&self) -> Result<(), String> {
         if !(self.centre.is_finite()) {
             return Err("centre must be finite".into());
@@ -139,16 +140,18 @@ impl Output for PressureFront {
         }
         Ok(())
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(PressureRecord {
+impl Output for PressureFront {
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(PressureRecord {
             spec: self.clone(),
             interval: Interval::new(self.every),
             initial: Vec::new(),
             times: Vec::new(),
             rows: Vec::new(),
         });
-        schedule.add_systems(record_pressure.in_set(StepSet::Output));
+        sim.add_systems(StepSet::Output, record_pressure);
     }
 }
 

@@ -33,6 +33,8 @@ use serde::{Deserialize, Serialize};
 use crate::body::{Body, BodyState, Points};
 use crate::grid::GridField;
 use crate::output::Output;
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 
 /// At rest: the final speed is below this fraction of the speed at first contact.
@@ -206,9 +208,8 @@ pub fn record_first_contact(
     }
 }
 
-impl Output for Impact {
+impl Item for Impact {
     const NAME: &'static str = "Impact";
-
     fn validate(&self) -> Result<(), String> {
         if self.body.is_empty() {
             return Err("body must name the impacting body".into());
@@ -221,7 +222,9 @@ impl Output for Impact {
         }
         Ok(())
     }
+}
 
+impl Output for Impact {
     fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
         match scene.bodies.iter().find(|b| b.name == self.body) {
             None => Err(format!(
@@ -242,20 +245,21 @@ impl Output for Impact {
         }
     }
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+    fn install(&self, sim: &mut Install) {
+        let world = sim.world();
         let time = world.get_resource::<Clock>().map_or(0.0, |c| c.time);
         let mut q = world.query::<(&Body, &Points)>();
         let start = q
             .iter(world)
             .find(|(b, _)| b.name == self.body)
             .map(|(_, p)| ContactInstant::of(time, &BodyState::measure(p), p));
-        world.insert_resource(ImpactWatch {
+        sim.insert_resource(ImpactWatch {
             body: self.body.clone(),
             surface: self.surface,
             contact: None,
             before: start,
         });
-        schedule.add_systems(record_first_contact.in_set(crate::step::StepSet::Output));
+        sim.add_systems(crate::step::StepSet::Output, record_first_contact);
     }
 }
 #[cfg(test)]

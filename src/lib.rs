@@ -10,6 +10,7 @@
 
 pub mod body;
 pub mod checkpoint;
+pub mod condition;
 pub mod contact;
 pub mod diagnostics;
 pub mod error;

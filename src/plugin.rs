@@ -1,57 +1,65 @@
-//! Plugins: how materials, shapes and outputs become available to scenes.
+//! Plugins: how scene items, systems and resources become part of regolith.
 //!
-//! [`Regolith`] collects plugins; each registers what it provides by name in the
-//! [`Registries`]. Scenes are then parsed against those names, and a simulation built from a
-//! scene adds only the systems its bodies and outputs need. The built-in items come in
-//! [`DefaultPlugins`] and register exactly as a user's plugin would.
+//! A [`Plugin`] receives the [`Regolith`] being assembled and adds to it: scene items of any
+//! kind ([`Regolith::register`]: materials, shapes, outputs, conditions, or a kind of the
+//! plugin's own), systems for a named step set ([`Regolith::add_systems`]) and resources
+//! ([`Regolith::insert_resource`]). A scene is parsed against the result and carries it
+//! ([`Scene::registries`](crate::scene::Scene)), so a simulation built from the scene runs the
+//! systems its plugins added. The built-in items come in [`DefaultPlugins`] and register
+//! exactly as a user's plugin would.
 
-use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleConfigs;
+use bevy_ecs::system::ScheduleSystem;
 
 use crate::error::SceneError;
 use crate::flow_field::FlowField;
 use crate::free_surface::FreeSurface;
 use crate::front::PressureFront;
 use crate::impact::Impact;
-use crate::material::MaterialPlugin;
+use crate::material::MaterialSpec;
 use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
-use crate::output::OutputPlugin;
+use crate::output::Output;
 use crate::output::snapshots::Snapshots;
 use crate::output::vtk::Vtk;
-use crate::registry::Registries;
+use crate::registry::{IntoKind, Item, Kind, Registries};
 use crate::scene::Scene;
-use crate::shape::ShapePlugin;
+use crate::shape::Shape;
 use crate::shape::builtin::{Disc, Polygon, Rectangle};
 use crate::shape::intruder::TippedIntruder;
+use crate::step::{Core, StepSet};
 
-/// Something that registers scene items.
+/// Something that adds scene items, systems or resources to regolith.
 pub trait Plugin {
-    fn build(&self, registries: &mut Registries);
+    fn build(&self, app: &mut Regolith);
 }
 
 /// The built-in materials, shapes and outputs.
 pub struct DefaultPlugins;
 
 impl Plugin for DefaultPlugins {
-    fn build(&self, r: &mut Registries) {
-        MaterialPlugin::<LinearElastic>::default().build(r);
-        MaterialPlugin::<MuI>::default().build(r);
-        MaterialPlugin::<DruckerPrager>::default().build(r);
-        ShapePlugin::<Rectangle>::default().build(r);
-        ShapePlugin::<Disc>::default().build(r);
-        ShapePlugin::<Polygon>::default().build(r);
-        ShapePlugin::<TippedIntruder>::default().build(r);
-        OutputPlugin::<Snapshots>::default().build(r);
-        OutputPlugin::<Vtk>::default().build(r);
-        OutputPlugin::<Impact>::default().build(r);
-        OutputPlugin::<PressureFront>::default().build(r);
-        OutputPlugin::<FlowField>::default().build(r);
-        OutputPlugin::<FreeSurface>::default().build(r);
+    fn build(&self, app: &mut Regolith) {
+        app.register::<dyn MaterialSpec, LinearElastic>()
+            .register::<dyn MaterialSpec, MuI>()
+            .register::<dyn MaterialSpec, DruckerPrager>()
+            .register::<dyn Shape, Rectangle>()
+            .register::<dyn Shape, Disc>()
+            .register::<dyn Shape, Polygon>()
+            .register::<dyn Shape, TippedIntruder>()
+            .register::<dyn Output, Snapshots>()
+            .register::<dyn Output, Vtk>()
+            .register::<dyn Output, Impact>()
+            .register::<dyn Output, PressureFront>()
+            .register::<dyn Output, FlowField>()
+            .register::<dyn Output, FreeSurface>();
     }
 }
 
-/// The set of plugins a program uses, and the scene loader that knows their names.
+/// The set of plugins a program uses, being assembled; [`Regolith::registries`] freezes it
+/// for parsing scenes.
 pub struct Regolith {
     registries: Registries,
 }
@@ -72,22 +80,84 @@ impl Regolith {
     }
 
     pub fn add_plugin(mut self, plugin: impl Plugin) -> Self {
-        plugin.build(&mut self.registries);
+        plugin.build(&mut self);
         self
     }
 
-    /// The registered catalogues, ready for parsing.
-    pub fn registries(self) -> Rc<Registries> {
-        Rc::new(self.registries)
+    /// Makes item `P` available to scenes under `P::NAME` as an item of kind `K`, e.g.
+    /// `app.register::<dyn Shape, Ellipse>()`. A later registration of the same name
+    /// replaces an earlier one (a user's plugin may override a built-in).
+    pub fn register<K: ?Sized + Kind, P: Item + IntoKind<K>>(&mut self) -> &mut Self {
+        self.registries.register::<K, P>();
+        self
+    }
+
+    /// Adds `systems` to step set `set` of every simulation, after the set's core systems,
+    /// e.g. `app.add_systems(StepSet::Prepare, drive_points)`. The schedule's ambiguity
+    /// check rejects two systems that touch the same data in no defined order (naming
+    /// both); order yours with bevy's `before`/`after`.
+    pub fn add_systems<M>(
+        &mut self,
+        set: StepSet,
+        systems: impl IntoScheduleConfigs<ScheduleSystem, M> + Clone + Send + Sync + 'static,
+    ) -> &mut Self {
+        self.registries.push_systems(Arc::new(move |schedule| {
+            let configs: ScheduleConfigs<ScheduleSystem> =
+                systems.clone().in_set(set).after(Core(set));
+            schedule.add_systems(configs);
+        }));
+        self
+    }
+
+    /// Inserts `resource` into every simulation's world (a copy each).
+    pub fn insert_resource<R: Resource + Clone>(&mut self, resource: R) -> &mut Self {
+        self.registries.push_resource(Arc::new(move |world| {
+            world.insert_resource(resource.clone())
+        }));
+        self
+    }
+
+    /// What the plugins added, ready for parsing scenes.
+    pub fn registries(self) -> Arc<Registries> {
+        Arc::new(self.registries)
+    }
+}
+
+/// What a scene item (an output, a condition) may add to the simulation being built: its
+/// resources, and its systems in a named step set, after the set's core systems.
+pub struct Install<'a> {
+    world: &'a mut World,
+    schedule: &'a mut Schedule,
+}
+
+impl<'a> Install<'a> {
+    pub(crate) fn new(world: &'a mut World, schedule: &'a mut Schedule) -> Self {
+        Install { world, schedule }
+    }
+
+    /// Adds `systems` to step set `set`, after the set's core systems.
+    pub fn add_systems<M>(
+        &mut self,
+        set: StepSet,
+        systems: impl IntoScheduleConfigs<ScheduleSystem, M>,
+    ) -> &mut Self {
+        self.schedule
+            .add_systems(systems.in_set(set).after(Core(set)));
+        self
+    }
+
+    pub fn insert_resource<R: Resource>(&mut self, resource: R) -> &mut Self {
+        self.world.insert_resource(resource);
+        self
+    }
+
+    /// The world as built so far: the bodies (with their points at t = 0), the grid.
+    pub fn world(&mut self) -> &mut World {
+        self.world
     }
 }
 
 /// Parses scene text against the default plugins (a convenience for tests and examples).
 pub fn parse_scene(text: &str) -> Result<Scene, SceneError> {
     Scene::parse(text, "<scene>", &Regolith::default().registries())
-}
-
-/// Loads a scene file against the default plugins.
-pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    Ok(Scene::load(path, &[], &Regolith::default().registries())?.0)
 }

@@ -1,155 +1,197 @@
-//! Name-keyed catalogues of plugin-provided scene items (materials, shapes, outputs).
+//! Name-keyed catalogues of scene items, one generic catalogue per kind of item.
 //!
 //! A scene names a material as `LinearElastic(density: .., ..)`; which names exist depends on
-//! the plugins added, so these items cannot be a closed serde enum. Each plugin registers a
-//! constructor that deserialises its own parameters through `erased_serde`. While a scene is
-//! being deserialised the active catalogues are installed in a thread-local
-//! ([`with_registries`]), and [`Named`] looks the variant name up there. Errors raised inside a
-//! plugin's parameters surface through the outer deserialiser, so RON still reports the line
-//! and column.
+//! the plugins added, so items cannot be a closed serde enum. An item is a parameter type
+//! ([`Item`]: its scene name and its checks) that implements the trait of its kind (a
+//! [`Kind`]: `dyn Shape`, `dyn Output`, `dyn Condition`, `dyn MaterialSpec`, ...). A plugin
+//! registers it with [`crate::Regolith::register`], which files a constructor under
+//! the item's name in the catalogue of that kind; any kind, built-in or a plugin's own, goes
+//! through the same code.
+//!
+//! While a scene is being deserialised the active catalogues are installed in a thread-local
+//! ([`with_registries`]), and [`Named`] looks the variant name up there. The constructor
+//! deserialises the item's own parameters through `erased_serde`, and the item's checks run
+//! at once, so errors inside a plugin's parameters still carry the RON line and column.
 
+use std::any::{Any, TypeId};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
-use std::rc::Rc;
+use std::sync::Arc;
 
+use bevy_ecs::prelude::*;
+use dyn_clone::DynClone;
 use serde::de::{self, DeserializeOwned, EnumAccess, VariantAccess};
 use serde::{Deserialize, Deserializer};
 
-use crate::material::MaterialSpec;
-use crate::output::OutputSpec;
-use crate::shape::ShapeSpec;
+/// What every scene item is: a parameter type read from RON under its own name.
+pub trait Item: Clone + fmt::Debug + Send + Sync + DeserializeOwned + 'static {
+    /// The name used in scene files, e.g. `Disc`.
+    const NAME: &'static str;
+    /// Checks the parameters; the message says which one is wrong and what was expected.
+    fn validate(&self) -> Result<(), String> {
+        Ok(())
+    }
+}
 
-/// Something a plugin can put in a scene under its own name. Implemented for the trait
-/// objects (`dyn MaterialSpec`, ...) by [`impl_named_spec`], from the methods every spec
-/// trait declares (`name`, `clone_spec`, `validate`).
-pub trait NamedSpec: fmt::Debug + Send + Sync {
+/// [`Item`] as a trait object sees it; implemented for every item, so a kind's trait only
+/// names it as a supertrait.
+pub trait DynItem: fmt::Debug + Send + Sync + DynClone {
     /// The name used in scene files.
     fn name(&self) -> &'static str;
-    /// A copy of this item.
-    fn clone_box(&self) -> Box<Self>;
-    /// Checks the parameters; the message says which one is wrong and what was expected.
+    /// [`Item::validate`].
     fn validate(&self) -> Result<(), String>;
 }
 
-/// Implements [`NamedSpec`] for `dyn $spec`, a trait with `name`, `clone_spec` and
-/// `validate` methods.
-#[macro_export]
-macro_rules! impl_named_spec {
-    ($spec:ident) => {
-        impl $crate::registry::NamedSpec for dyn $spec {
-            fn name(&self) -> &'static str {
-                $spec::name(self)
-            }
-            fn clone_box(&self) -> Box<Self> {
-                $spec::clone_spec(self)
-            }
-            fn validate(&self) -> Result<(), String> {
-                $spec::validate(self)
-            }
-        }
-    };
-}
-
-type Constructor<T> =
-    for<'de> fn(&mut dyn erased_serde::Deserializer<'de>) -> Result<Box<T>, erased_serde::Error>;
-
-/// The registered items of one kind, by name.
-pub struct Catalog<T: ?Sized> {
-    entries: BTreeMap<&'static str, Constructor<T>>,
-}
-
-impl<T: ?Sized> Clone for Catalog<T> {
-    fn clone(&self) -> Self {
-        Catalog {
-            entries: self.entries.clone(),
-        }
+impl<T: Item> DynItem for T {
+    fn name(&self) -> &'static str {
+        T::NAME
+    }
+    fn validate(&self) -> Result<(), String> {
+        Item::validate(self)
     }
 }
 
-impl<T: ?Sized> Default for Catalog<T> {
-    fn default() -> Self {
-        Catalog {
-            entries: BTreeMap::new(),
-        }
-    }
-}
-
-impl<T: ?Sized> Catalog<T> {
-    /// Registers a constructor under `name`; a later registration of the same name replaces
-    /// the earlier one (so a user plugin may override a built-in).
-    pub fn insert(&mut self, name: &'static str, ctor: Constructor<T>) {
-        self.entries.insert(name, ctor);
-    }
-
-    pub fn names(&self) -> Vec<&'static str> {
-        self.entries.keys().copied().collect()
-    }
-
-    fn get(&self, name: &str) -> Option<Constructor<T>> {
-        self.entries.get(name).copied()
-    }
-}
-
-/// Conversion of a plugin's parameter type into the catalogue's trait object.
-pub trait IntoSpec<T: ?Sized> {
-    fn into_spec(self) -> Box<T>;
-}
-
-/// Deserialises a concrete parameter type and boxes it as the catalogue's trait object.
-pub fn construct<P, T>(
-    d: &mut dyn erased_serde::Deserializer<'_>,
-) -> Result<Box<T>, erased_serde::Error>
-where
-    P: DeserializeOwned + IntoSpec<T>,
-    T: ?Sized,
-{
-    let params: P = erased_serde::deserialize(d)?;
-    Ok(params.into_spec())
-}
-
-/// Every catalogue the scene format consults.
-#[derive(Clone, Default)]
-pub struct Registries {
-    pub materials: Catalog<dyn MaterialSpec>,
-    pub shapes: Catalog<dyn ShapeSpec>,
-    pub outputs: Catalog<dyn OutputSpec>,
-}
-
-/// Which catalogue holds items of type `T`.
-pub trait CatalogFor<T: ?Sized> {
-    fn catalog(&self) -> &Catalog<T>;
-    /// What the item is called in messages ("material", "shape", ...).
+/// A kind of scene item: the trait object its catalogue holds (`dyn Shape`, ...).
+/// Declared with [`item_kind!`](crate::item_kind).
+pub trait Kind: DynItem + 'static {
+    /// What the kind is called in messages ("material", "shape", ...).
     const KIND: &'static str;
 }
 
-impl CatalogFor<dyn MaterialSpec> for Registries {
-    fn catalog(&self) -> &Catalog<dyn MaterialSpec> {
-        &self.materials
-    }
-    const KIND: &'static str = "material";
+/// Conversion of an item into its kind's trait object (written by [`item_kind!`](crate::item_kind)
+/// for every type implementing the kind's trait).
+pub trait IntoKind<K: ?Sized> {
+    fn into_kind(self) -> Box<K>;
 }
-impl CatalogFor<dyn ShapeSpec> for Registries {
-    fn catalog(&self) -> &Catalog<dyn ShapeSpec> {
-        &self.shapes
-    }
-    const KIND: &'static str = "shape";
+
+/// Declares `dyn $trait` a kind of scene item called `$kind` in messages: boxed items of it
+/// clone, and every [`Item`] implementing `$trait` converts into one.
+#[macro_export]
+macro_rules! item_kind {
+    ($trait:ident, $kind:literal) => {
+        impl $crate::registry::Kind for dyn $trait {
+            const KIND: &'static str = $kind;
+        }
+        impl<T: $trait + $crate::registry::Item> $crate::registry::IntoKind<dyn $trait> for T {
+            fn into_kind(self) -> Box<dyn $trait> {
+                Box::new(self)
+            }
+        }
+        $crate::registry::dyn_clone::clone_trait_object!($trait);
+    };
 }
-impl CatalogFor<dyn OutputSpec> for Registries {
-    fn catalog(&self) -> &Catalog<dyn OutputSpec> {
-        &self.outputs
+
+#[doc(hidden)]
+pub use dyn_clone;
+
+type Constructor<K> =
+    for<'de> fn(&mut dyn erased_serde::Deserializer<'de>) -> Result<Box<K>, erased_serde::Error>;
+
+/// Deserialises item `P` and boxes it as kind `K`.
+fn construct<K: ?Sized, P: Item + IntoKind<K>>(
+    d: &mut dyn erased_serde::Deserializer<'_>,
+) -> Result<Box<K>, erased_serde::Error> {
+    let params: P = erased_serde::deserialize(d)?;
+    Ok(params.into_kind())
+}
+
+/// The registered items of one kind, by name.
+struct Catalog<K: ?Sized> {
+    entries: BTreeMap<&'static str, Constructor<K>>,
+}
+
+/// Adds a plugin's systems to a schedule (one closure per `add_systems` call).
+type AddSystems = Arc<dyn Fn(&mut Schedule) + Send + Sync>;
+/// Inserts a plugin's resource into a world.
+type AddResource = Arc<dyn Fn(&mut World) + Send + Sync>;
+
+/// What the plugins of a program registered: a catalogue of items per kind, which the scene
+/// format consults, and the systems and resources every simulation gets. Scenes carry the
+/// registries they were parsed against ([`crate::Scene::registries`]).
+#[derive(Default)]
+pub struct Registries {
+    catalogs: BTreeMap<TypeId, Box<dyn Any + Send + Sync>>,
+    systems: Vec<AddSystems>,
+    resources: Vec<AddResource>,
+}
+
+impl Registries {
+    /// Adds `add` (which adds systems to a schedule) to every simulation's schedule.
+    pub(crate) fn push_systems(&mut self, add: AddSystems) {
+        self.systems.push(add);
     }
-    const KIND: &'static str = "output";
+
+    /// Adds `add` (which inserts a resource) to every simulation's world.
+    pub(crate) fn push_resource(&mut self, add: AddResource) {
+        self.resources.push(add);
+    }
+
+    /// Adds the plugins' resources to `world` and their systems to `schedule`.
+    pub(crate) fn install(&self, world: &mut World, schedule: &mut Schedule) {
+        for add in &self.resources {
+            add(world);
+        }
+        for add in &self.systems {
+            add(schedule);
+        }
+    }
+
+    /// Files item `P` under `P::NAME` in the catalogue of kind `K`; a later registration of
+    /// the same name replaces the earlier one (so a user plugin may override a built-in).
+    pub fn register<K: ?Sized + Kind, P: Item + IntoKind<K>>(&mut self) {
+        self.catalogs
+            .entry(TypeId::of::<K>())
+            .or_insert_with(|| {
+                Box::new(Catalog::<K> {
+                    entries: BTreeMap::new(),
+                })
+            })
+            .downcast_mut::<Catalog<K>>()
+            .expect("catalogues are filed by their kind's type")
+            .entries
+            .insert(P::NAME, construct::<K, P>);
+    }
+
+    fn catalog<K: ?Sized + Kind>(&self) -> Option<&Catalog<K>> {
+        self.catalogs
+            .get(&TypeId::of::<K>())
+            .and_then(|c| c.downcast_ref::<Catalog<K>>())
+    }
+
+    /// The names of the registered items of kind `K`, sorted.
+    pub fn names<K: ?Sized + Kind>(&self) -> Vec<&'static str> {
+        self.catalog::<K>()
+            .map(|c| c.entries.keys().copied().collect())
+            .unwrap_or_default()
+    }
+
+    fn constructor<K: ?Sized + Kind>(&self, name: &str) -> Option<Constructor<K>> {
+        self.catalog::<K>()
+            .and_then(|c| c.entries.get(name).copied())
+    }
+}
+
+impl fmt::Debug for Registries {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Registries({} kinds, {} system groups, {} resources)",
+            self.catalogs.len(),
+            self.systems.len(),
+            self.resources.len()
+        )
+    }
 }
 
 thread_local! {
-    static ACTIVE: RefCell<Option<Rc<Registries>>> = const { RefCell::new(None) };
+    static ACTIVE: RefCell<Option<Arc<Registries>>> = const { RefCell::new(None) };
 }
 
 /// Runs `f` with `reg` as the catalogues that [`Named`] items are looked up in.
-pub fn with_registries<R>(reg: &Rc<Registries>, f: impl FnOnce() -> R) -> R {
-    struct Restore(Option<Rc<Registries>>);
+pub fn with_registries<R>(reg: &Arc<Registries>, f: impl FnOnce() -> R) -> R {
+    struct Restore(Option<Arc<Registries>>);
     impl Drop for Restore {
         fn drop(&mut self) {
             ACTIVE.with(|a| *a.borrow_mut() = self.0.take());
@@ -160,47 +202,44 @@ pub fn with_registries<R>(reg: &Rc<Registries>, f: impl FnOnce() -> R) -> R {
     f()
 }
 
-/// A plugin item chosen by name in a scene, e.g. `Disc(centre: (0.5, 0.5), radius: 0.1)`.
-pub struct Named<T: ?Sized>(pub Box<T>);
+/// An item of kind `K` chosen by name in a scene, e.g. `Disc(centre: (0.5, 0.5), radius: 0.1)`.
+pub struct Named<K: ?Sized>(pub Box<K>);
 
-impl<T: ?Sized + NamedSpec> Clone for Named<T> {
+impl<K: ?Sized + Kind> Clone for Named<K>
+where
+    Box<K>: Clone,
+{
     fn clone(&self) -> Self {
-        Named(self.0.clone_box())
+        Named(self.0.clone())
     }
 }
 
-impl<T: ?Sized + NamedSpec> fmt::Debug for Named<T> {
+impl<K: ?Sized + Kind> fmt::Debug for Named<K> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.0.fmt(f)
     }
 }
 
-impl<T: ?Sized> std::ops::Deref for Named<T> {
-    type Target = T;
-    fn deref(&self) -> &T {
+impl<K: ?Sized> std::ops::Deref for Named<K> {
+    type Target = K;
+    fn deref(&self) -> &K {
         &self.0
     }
 }
 
-impl<'de, T: ?Sized + NamedSpec + 'static> Deserialize<'de> for Named<T>
-where
-    Registries: CatalogFor<T>,
-{
+impl<'de, K: ?Sized + Kind> Deserialize<'de> for Named<K> {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        d.deserialize_enum("Named", &[], NamedVisitor::<T>(PhantomData))
+        d.deserialize_enum("Named", &[], NamedVisitor::<K>(PhantomData))
     }
 }
 
-struct NamedVisitor<T: ?Sized>(PhantomData<fn() -> Box<T>>);
+struct NamedVisitor<K: ?Sized>(PhantomData<fn() -> Box<K>>);
 
-impl<'de, T: ?Sized + NamedSpec + 'static> de::Visitor<'de> for NamedVisitor<T>
-where
-    Registries: CatalogFor<T>,
-{
-    type Value = Named<T>;
+impl<'de, K: ?Sized + Kind> de::Visitor<'de> for NamedVisitor<K> {
+    type Value = Named<K>;
 
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "a {} such as `Name(field: value, ..)`", Registries::KIND)
+        write!(f, "a {} such as `Name(field: value, ..)`", K::KIND)
     }
 
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Self::Value, A::Error> {
@@ -210,13 +249,12 @@ where
             let reg = reg.as_ref().ok_or_else(|| {
                 de::Error::custom("no plugin registry is active (internal error)")
             })?;
-            let catalog = <Registries as CatalogFor<T>>::catalog(reg);
-            catalog.get(&name).ok_or_else(|| {
+            reg.constructor::<K>(&name).ok_or_else(|| {
                 de::Error::custom(format!(
                     "unknown {} `{}`, expected one of: {}",
-                    Registries::KIND,
+                    K::KIND,
                     name,
-                    catalog.names().join(", ")
+                    reg.names::<K>().join(", ")
                 ))
             })
         })?;
@@ -243,13 +281,13 @@ impl<'de> Deserialize<'de> for VariantName {
     }
 }
 
-struct ParamsVisitor<T: ?Sized> {
-    ctor: Constructor<T>,
+struct ParamsVisitor<K: ?Sized> {
+    ctor: Constructor<K>,
     name: String,
 }
 
-impl<'de, T: ?Sized + NamedSpec> de::Visitor<'de> for ParamsVisitor<T> {
-    type Value = Named<T>;
+impl<'de, K: ?Sized + Kind> de::Visitor<'de> for ParamsVisitor<K> {
+    type Value = Named<K>;
 
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
@@ -262,11 +300,11 @@ impl<'de, T: ?Sized + NamedSpec> de::Visitor<'de> for ParamsVisitor<T> {
     fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
         let d = de::value::MapAccessDeserializer::new(map);
         let mut erased = <dyn erased_serde::Deserializer>::erase(d);
-        let spec = (self.ctor)(&mut erased)
+        let item = (self.ctor)(&mut erased)
             .map_err(|e| de::Error::custom(format!("in `{}`: {e}", self.name)))?;
         // Physical checks run here so that RON can still say where the item ends.
-        spec.validate()
+        item.validate()
             .map_err(|e| de::Error::custom(format!("in `{}`: {e}", self.name)))?;
-        Ok(Named(spec))
+        Ok(Named(item))
     }
 }

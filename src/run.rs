@@ -71,7 +71,7 @@ pub fn run_scene(
 /// from (`scene.ron`); the result is bitwise identical to a run never interrupted.
 /// `extend` may add outputs that do not change the state (the command line's recording).
 pub fn resume_run(
-    registries: &std::rc::Rc<crate::registry::Registries>,
+    registries: &std::sync::Arc<crate::registry::Registries>,
     out: &Path,
     checkpoints: CheckpointEvery,
     extend: impl FnOnce(&mut Scene) -> Result<(), Error>,
@@ -230,7 +230,13 @@ pub fn summarize(
         .world
         .get_resource::<crate::front::PressureRecord>()
         .and_then(|r| r.front());
+    let sections = scene
+        .conditions
+        .iter()
+        .filter_map(|c| c.summary(&sim.world))
+        .collect();
     Summary {
+        sections,
         impact,
         impact_not_measured,
         units: crate::output::summary::units(),

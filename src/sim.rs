@@ -7,15 +7,16 @@ use glam::{DMat2, DVec2};
 use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
-use crate::contact::{self, Contact, ContactLaw};
+use crate::contact::ContactLaw;
 use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::output::trajectory::Trajectory;
 use crate::output::{OutputFaults, RunDir};
+use crate::plugin::Install;
 use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Transfer, Walls};
-use crate::step::{self, StepSet, Timings};
+use crate::step::{self, Timings};
 use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
 
@@ -139,13 +140,14 @@ impl Simulation {
     fn build(scene: &Scene, dir: Option<&std::path::Path>) -> std::io::Result<Simulation> {
         let grid = scene.grid();
         let mut world = World::new();
+        let multi_body = scene.bodies.len() > 1;
         let mut schedule = step::build_schedule(step::StepOptions {
             integration: scene.integration,
             update: scene.update,
             dilatation: scene.dilatation,
             transfer: scene.transfer,
+            contact: multi_body.then(|| scene.contact.clone()),
         });
-        let multi_body = scene.bodies.len() > 1;
         let mut materials = BTreeSet::new();
         let mut tracked = Vec::new();
         for (index, spec) in scene.bodies.iter().enumerate() {
@@ -217,18 +219,14 @@ impl Simulation {
         }
         if multi_body {
             world.insert_resource(ContactLaw(scene.contact.clone()));
-            match scene.contact {
-                Contact::NoSlip => {
-                    schedule.add_systems(contact::no_slip.in_set(StepSet::Contact));
-                }
-                Contact::Frictional { .. } => {
-                    schedule.add_systems(contact::frictional.in_set(StepSet::Contact));
-                }
-            }
         }
         for output in &scene.outputs {
-            output.install(&mut world, &mut schedule);
+            output.install(&mut Install::new(&mut world, &mut schedule));
         }
+        for condition in &scene.conditions {
+            condition.install(&mut Install::new(&mut world, &mut schedule));
+        }
+        scene.registries.install(&mut world, &mut schedule);
         world.insert_resource(grid);
         world.insert_resource(Clock {
             time: 0.0,

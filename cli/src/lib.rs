@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::rc::Rc;
+use std::sync::Arc;
 use std::time::Duration;
 
 use clap::{Args, Parser, Subcommand};
@@ -303,12 +303,15 @@ impl RecordArgs {
     }
 
     /// Adds the recording to `scene`, or says why it cannot be made.
-    fn apply(&self, scene: &mut Scene, registries: &Rc<Registries>) -> Result<(), Error> {
+    fn apply(&self, scene: &mut Scene, registries: &Arc<Registries>) -> Result<(), Error> {
         let flags = |message: String| Error::Scene(SceneError::file("command line", message));
         let Some(text) = self.output_text().map_err(flags)? else {
             return Ok(());
         };
-        if !registries.outputs.names().contains(&RECORDER) {
+        if !registries
+            .names::<dyn regolith::output::Output>()
+            .contains(&RECORDER)
+        {
             return Err(flags(
                 "this program was built without the Rerun recorder; use the `regolith` \
                  command of the workspace (cli/), which includes it, or add \
@@ -339,7 +342,7 @@ struct VtkArgs {
 
 impl VtkArgs {
     /// Adds the `Vtk(..)` output to `scene`, replacing the scene's own.
-    fn apply(&self, scene: &mut Scene, registries: &Rc<Registries>) -> Result<(), Error> {
+    fn apply(&self, scene: &mut Scene, registries: &Arc<Registries>) -> Result<(), Error> {
         let Some(every) = self.vtk else {
             return Ok(());
         };
@@ -568,7 +571,7 @@ struct RunFlags {
 }
 
 fn run(
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
     path: &Path,
     out: Option<PathBuf>,
     sets: &[String],
@@ -626,7 +629,7 @@ fn run(
 
 /// `regolith sweep` or `regolith study`: collect a plan, write one, or run the file here.
 fn batch_command<B: BatchFile>(
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
     file: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: Option<u64>,
@@ -647,7 +650,7 @@ fn batch_command<B: BatchFile>(
     println!("{name}: {runs} runs into {}", out.display());
     let report = |line: &str| println!("{line}");
     let jobs = jobs.map(|j| j as usize);
-    let failed = run_local(&path, &batch, &out, jobs, shared(registries), report)?;
+    let failed = run_local(&path, &batch, &out, jobs, registries, report)?;
     println!(
         "{name}: done, {failed} failed; table in {}",
         out.join(B::TABLE).display()
@@ -675,7 +678,7 @@ fn plan_batch(
     path: &Path,
     batch: &impl BatchFile,
     dir: &Path,
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
     slurm: SlurmArgs,
 ) -> Result<(), Error> {
     let options = SlurmOptions {
@@ -730,14 +733,8 @@ fn collect_plan(dir: &Path, partial: bool) -> Result<(), Error> {
     Ok(())
 }
 
-/// A maker of registries for batch threads (an `Rc` cannot cross threads; its contents can).
-fn shared(registries: &Rc<Registries>) -> impl Fn() -> Rc<Registries> + Sync + use<> {
-    let copy: Registries = (**registries).clone();
-    move || Rc::new(copy.clone())
-}
-
 fn resume(
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
     dir: &Path,
     quiet: bool,
     checkpoints: CheckpointEvery,
@@ -832,7 +829,7 @@ fn parse_depths(spec: &str) -> Result<Vec<f64>, String> {
         .collect())
 }
 
-fn check(registries: &Rc<Registries>, path: &Path, sets: &[String]) -> Result<(), Error> {
+fn check(registries: &Arc<Registries>, path: &Path, sets: &[String]) -> Result<(), Error> {
     let (scene, _) = Scene::load(path, sets, registries)?;
     for w in scene.warnings() {
         println!("warning: {w}");

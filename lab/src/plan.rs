@@ -109,7 +109,7 @@ pub(crate) fn digest(text: &str) -> String {
 fn resolved_text(
     scene_path: &Path,
     run: &Planned,
-    registries: &std::rc::Rc<Registries>,
+    registries: &std::sync::Arc<Registries>,
 ) -> Result<(Scene, String), Error> {
     let (scene, text) = Scene::load(scene_path, &run.sets, registries)?;
     if scene.preset.is_none() {
@@ -155,7 +155,7 @@ pub trait BatchFile: Sized + serde::de::DeserializeOwned {
     /// `plan.json` without its runs.
     fn head(&self) -> PlanFile;
     /// Refuses a batch that cannot give its results, before anything is written.
-    fn check(&self, _path: &Path, _registries: &std::rc::Rc<Registries>) -> Result<(), Error> {
+    fn check(&self, _path: &Path, _registries: &std::sync::Arc<Registries>) -> Result<(), Error> {
         Ok(())
     }
 }
@@ -169,7 +169,7 @@ pub fn write_plan(
     batch: &impl BatchFile,
     dir: &Path,
     layout: Layout,
-    registries: &std::rc::Rc<Registries>,
+    registries: &std::sync::Arc<Registries>,
     slurm: &SlurmOptions,
 ) -> Result<PlanFile, Error> {
     batch.check(path, registries)?;

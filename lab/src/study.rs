@@ -26,7 +26,7 @@
 //! the runs no other run beats on both joined up).
 
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
@@ -417,7 +417,7 @@ impl BatchFile for Study {
     }
 
     /// The measures come from the scene's Impact output: a scene without one is refused.
-    fn check(&self, path: &Path, registries: &Rc<Registries>) -> Result<(), Error> {
+    fn check(&self, path: &Path, registries: &Arc<Registries>) -> Result<(), Error> {
         let scene = beside(path, &self.scene);
         let (base, _) = regolith::scene::Scene::load(&scene, &self.set, registries)?;
         if base.outputs.iter().any(|o| o.name() == "Impact") {

@@ -6,7 +6,7 @@
 //! after every run.
 
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -27,7 +27,7 @@ pub fn run_local(
     batch: &impl BatchFile,
     out: &Path,
     jobs: Option<usize>,
-    registries: impl Fn() -> Rc<Registries> + Sync,
+    registries: &Arc<Registries>,
     report: impl Fn(&str) + Sync,
 ) -> Result<usize, Error> {
     let plan = write_plan(
@@ -35,7 +35,7 @@ pub fn run_local(
         batch,
         out,
         Layout::Local,
-        &registries(),
+        registries,
         &SlurmOptions::default(),
     )?;
     run_plan(out, &plan, jobs.or(batch.jobs()), registries, report)
@@ -53,7 +53,7 @@ pub fn run_plan(
     dir: &Path,
     plan: &PlanFile,
     jobs: Option<usize>,
-    registries: impl Fn() -> Rc<Registries> + Sync,
+    registries: &Arc<Registries>,
     report: impl Fn(&str) + Sync,
 ) -> Result<usize, Error> {
     let runs = &plan.runs;
@@ -81,12 +81,11 @@ pub fn run_plan(
                     .num_threads(1)
                     .build()
                     .expect("a one-thread pool");
-                let registries = registries();
                 loop {
                     let k = next.fetch_add(1, Ordering::SeqCst);
                     let Some(&i) = pending.get(k) else { break };
                     let run = &runs[i];
-                    let result = run_one(dir, run, &pool, &registries);
+                    let result = run_one(dir, run, &pool, registries);
                     let mut errors = errors.lock().expect("no run panics while holding the lock");
                     let values = run.values.join(", ");
                     match result {
@@ -121,7 +120,7 @@ fn run_one(
     dir: &Path,
     run: &PlannedRun,
     pool: &rayon::ThreadPool,
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
 ) -> Result<Claimed, Error> {
     let out = dir.join(&run.dir);
     let claimed = claim(&out, || completed(&out))

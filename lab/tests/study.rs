@@ -6,7 +6,6 @@
 #[path = "../../tests/common/mod.rs"]
 mod common;
 
-use std::rc::Rc;
 use std::sync::Mutex;
 
 use regolith::Regolith;
@@ -53,16 +52,10 @@ fn split_csv(line: &str) -> Vec<String> {
 fn run(path: &std::path::Path, out: &std::path::Path) -> Vec<String> {
     let study = Study::load(path).unwrap();
     let registries = Regolith::default().registries();
-    let shared = (*registries).clone();
     let lines = Mutex::new(Vec::new());
-    let failed = run_local(
-        path,
-        &study,
-        out,
-        Some(2),
-        || Rc::new(shared.clone()),
-        |l: &str| lines.lock().unwrap().push(l.to_string()),
-    )
+    let failed = run_local(path, &study, out, Some(2), &registries, |l: &str| {
+        lines.lock().unwrap().push(l.to_string())
+    })
     .unwrap();
     assert_eq!(failed, 0);
     lines.into_inner().unwrap()
@@ -137,18 +130,10 @@ fn a_scene_without_impact_measures_is_refused() {
     std::fs::write(&path, text).unwrap();
     let study = Study::load(&path).unwrap();
     let registries = Regolith::default().registries();
-    let shared = (*registries).clone();
     let out = dir.path().join("out");
-    let err = run_local(
-        &path,
-        &study,
-        &out,
-        Some(1),
-        || Rc::new(shared.clone()),
-        |_: &str| {},
-    )
-    .unwrap_err()
-    .to_string();
+    let err = run_local(&path, &study, &out, Some(1), &registries, |_: &str| {})
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("no Impact output"), "{err}");
     assert!(!out.exists(), "nothing should have run");
 }

@@ -8,7 +8,7 @@
 //! one-line message (`file:line:col: what was expected` for scenes).
 
 use std::path::PathBuf;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1};
@@ -47,7 +47,7 @@ fn run_error(e: impl std::fmt::Display) -> PyErr {
 
 /// The plugins of the `regolith` command, less the Rerun recorder (the package does not
 /// link the Rerun SDK).
-fn registries() -> Rc<Registries> {
+fn registries() -> Arc<Registries> {
     regolith::Regolith::default().registries()
 }
 

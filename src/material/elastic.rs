@@ -4,6 +4,7 @@
 use serde::Deserialize;
 
 use super::{Material, PointOutcome, PointStep};
+use crate::registry::Item;
 use crate::stress::Stress;
 
 /// `LinearElastic(density: .., youngs_modulus: .., poisson_ratio: ..)` in a scene.
@@ -50,13 +51,15 @@ pub fn validate_elastic(density: f64, youngs: f64, poisson: f64) -> Result<(), S
     Ok(())
 }
 
-impl Material for LinearElastic {
+impl Item for LinearElastic {
     const NAME: &'static str = "LinearElastic";
-    type History = ();
-
     fn validate(&self) -> Result<(), String> {
         validate_elastic(self.density, self.youngs_modulus, self.poisson_ratio)
     }
+}
+
+impl Material for LinearElastic {
+    type History = ();
 
     fn density(&self) -> f64 {
         self.density

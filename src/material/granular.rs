@@ -17,6 +17,7 @@ use serde::Deserialize;
 use super::elastic::moduli;
 use super::{Material, PointOutcome, PointStep};
 use crate::body::Phase;
+use crate::registry::Item;
 use crate::stress::Stress;
 
 /// Resolved parameters of the trans-phase model.
@@ -285,13 +286,14 @@ impl TryFrom<DruckerPragerParams> for DruckerPrager {
 /// The Material methods both names share.
 macro_rules! trans_phase_material {
     ($ty:ident, $name:literal, $inertial:expr) => {
-        impl Material for $ty {
+        // The parameters were checked when they were resolved (deserialisation).
+        impl Item for $ty {
             const NAME: &'static str = $name;
+        }
+
+        impl Material for $ty {
             type History = ();
 
-            fn validate(&self) -> Result<(), String> {
-                Ok(())
-            }
             fn density(&self) -> f64 {
                 self.0.critical_density
             }

@@ -1,7 +1,7 @@
 //! Materials: the constitutive update of a body's points, as plugins.
 //!
-//! A material is a parameter type implementing [`Material`]; [`MaterialPlugin`] registers it
-//! under its scene name. Bodies made of it get a [`MaterialState`] component (parameters plus
+//! A material is a parameter type implementing [`Material`], registered under its scene name
+//! as an item of kind `dyn MaterialSpec`. Bodies made of it get a [`MaterialState`] component (parameters plus
 //! one history entry per point) and the schedule gets one update system for that type, added
 //! only if some body uses it. Built-in materials register exactly this way.
 
@@ -9,7 +9,6 @@ pub mod elastic;
 pub mod granular;
 
 use std::fmt::Debug;
-use std::marker::PhantomData;
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::world::EntityWorldMut;
@@ -19,10 +18,9 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points};
-use crate::plugin::Plugin;
-use crate::registry::{IntoSpec, Registries, construct};
+use crate::registry::{DynItem, Item};
 use crate::sim::Clock;
-use crate::step::{MaterialUpdates, StepSet};
+use crate::step::{Core, MaterialUpdates, StepSet};
 use crate::stress::Stress;
 
 /// What the constitutive update of one point sees.
@@ -36,15 +34,12 @@ pub struct PointStep {
     pub density: f64,
 }
 
-/// A material model. Implement this, then add `MaterialPlugin::<YourType>::default()`.
-pub trait Material: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
-    /// The name used in scene files, e.g. `LinearElastic`.
-    const NAME: &'static str;
+/// A material model: an [`Item`] (its scene name and parameter checks) that implements
+/// this, registered with `app.register::<dyn MaterialSpec, YourType>()`.
+pub trait Material: Item {
     /// Per-point state the update carries from step to step.
     type History: Clone + Default + Debug + Send + Sync + Serialize + DeserializeOwned + 'static;
 
-    /// Checks the parameters; the message says which one is wrong and what was expected.
-    fn validate(&self) -> Result<(), String>;
     /// The mass density a body of this material is filled with (kg/m^3).
     fn density(&self) -> f64;
     /// Elastic p-wave speed (m/s) for the CFL condition.
@@ -78,11 +73,9 @@ pub struct PointOutcome {
     pub phase: Phase,
 }
 
-/// A material as the scene and the simulation builder see it (object safe).
-pub trait MaterialSpec: Debug + Send + Sync {
-    fn name(&self) -> &'static str;
-    fn clone_spec(&self) -> Box<dyn MaterialSpec>;
-    fn validate(&self) -> Result<(), String>;
+/// A material as the scene and the simulation builder see it: object safe, and implemented
+/// for every [`Material`] (whose typed history is not).
+pub trait MaterialSpec: DynItem {
     fn density(&self) -> f64;
     fn wave_speed(&self) -> f64;
     fn lithostatic_ratio(&self) -> f64;
@@ -100,18 +93,9 @@ pub trait MaterialSpec: Debug + Send + Sync {
     fn load_history(&self, world: &mut World, entity: Entity, bytes: &[u8]) -> Result<(), String>;
 }
 
-crate::impl_named_spec!(MaterialSpec);
+crate::item_kind!(MaterialSpec, "material");
 
 impl<M: Material> MaterialSpec for M {
-    fn name(&self) -> &'static str {
-        M::NAME
-    }
-    fn clone_spec(&self) -> Box<dyn MaterialSpec> {
-        Box::new(self.clone())
-    }
-    fn validate(&self) -> Result<(), String> {
-        Material::validate(self)
-    }
     fn density(&self) -> f64 {
         Material::density(self)
     }
@@ -136,7 +120,7 @@ impl<M: Material> MaterialSpec for M {
     fn add_systems(&self, schedule: &mut Schedule) {
         schedule.add_systems(
             update_stress::<M>
-                .in_set(StepSet::ConstitutiveUpdate)
+                .in_set(Core(StepSet::ConstitutiveUpdate))
                 .in_set(MaterialUpdates)
                 // Each material's system only touches bodies carrying its own state.
                 .ambiguous_with(MaterialUpdates),
@@ -168,34 +152,11 @@ impl<M: Material> MaterialSpec for M {
     }
 }
 
-impl<M: Material> IntoSpec<dyn MaterialSpec> for M {
-    fn into_spec(self) -> Box<dyn MaterialSpec> {
-        Box::new(self)
-    }
-}
-
 /// A body's material parameters and per-point history.
 #[derive(Component, Clone, Debug)]
 pub struct MaterialState<M: Material> {
     pub params: M,
     pub history: Vec<M::History>,
-}
-
-/// Registers material `M` under `M::NAME`.
-pub struct MaterialPlugin<M>(PhantomData<fn() -> M>);
-
-impl<M> Default for MaterialPlugin<M> {
-    fn default() -> Self {
-        MaterialPlugin(PhantomData)
-    }
-}
-
-impl<M: Material> Plugin for MaterialPlugin<M> {
-    fn build(&self, registries: &mut Registries) {
-        registries
-            .materials
-            .insert(M::NAME, construct::<M, dyn MaterialSpec>);
-    }
 }
 
 /// The constitutive update of every body made of `M` (SCIENCE.md 2, step 7).
@@ -205,7 +166,9 @@ pub fn update_stress<M: Material>(
 ) {
     let dt = clock.dt;
     for (mut points, mut states, mut state) in &mut bodies {
-        let points = &mut *points;
+        // The stress update never moves a point, so it leaves `Points` unmarked: the cells
+        // found after this step's move stay current for the next step (`step::Location`).
+        let points = points.bypass_change_detection();
         let states = &mut *states;
         let state = &mut *state;
         let params = &state.params;

@@ -13,94 +13,36 @@ pub mod vtk;
 
 use std::fmt::Debug;
 use std::io::Write;
-use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use bevy_ecs::prelude::*;
-use serde::de::DeserializeOwned;
 
 use crate::error::Fault;
-use crate::plugin::Plugin;
-use crate::registry::{IntoSpec, Registries, construct};
+use crate::plugin::Install;
+use crate::registry::DynItem;
 use crate::sim::Clock;
 
 /// The directory a run writes into, if it writes files at all (tests run without one).
 #[derive(Resource, Clone, Debug, Default)]
 pub struct RunDir(pub Option<PathBuf>);
 
-/// An extra output. Implement this, then add `OutputPlugin::<YourType>::default()`.
-pub trait Output: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
-    /// The name used in scene files, e.g. `Snapshots`.
-    const NAME: &'static str;
-    fn validate(&self) -> Result<(), String>;
+/// An extra output: an [`Item`](crate::registry::Item) (its scene name and parameter
+/// checks) that implements this, registered with `app.register::<dyn Output, YourType>()`.
+pub trait Output: DynItem {
     /// What must hold between the output and the rest of the scene (e.g. that a body it
     /// names exists); `check` reports a failure at the output's line. By default nothing.
     fn check_scene(&self, _scene: &crate::scene::Scene) -> Result<(), String> {
         Ok(())
     }
     /// Adds the output's resources and its systems (in [`crate::step::StepSet::Output`]).
-    fn install(&self, world: &mut World, schedule: &mut Schedule);
+    fn install(&self, sim: &mut Install);
     /// Re-aligns the output's own schedule with a run resumed at `time` (the state it
     /// would have had then); by default nothing.
     fn resume(&self, _world: &mut World, _time: f64) {}
 }
 
-/// An output as the scene and the simulation builder see it (object safe).
-pub trait OutputSpec: Debug + Send + Sync {
-    fn name(&self) -> &'static str;
-    fn clone_spec(&self) -> Box<dyn OutputSpec>;
-    fn validate(&self) -> Result<(), String>;
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String>;
-    fn install(&self, world: &mut World, schedule: &mut Schedule);
-    fn resume(&self, world: &mut World, time: f64);
-}
-
-crate::impl_named_spec!(OutputSpec);
-
-impl<O: Output> OutputSpec for O {
-    fn name(&self) -> &'static str {
-        O::NAME
-    }
-    fn clone_spec(&self) -> Box<dyn OutputSpec> {
-        Box::new(self.clone())
-    }
-    fn validate(&self) -> Result<(), String> {
-        Output::validate(self)
-    }
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
-        Output::check_scene(self, scene)
-    }
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        Output::install(self, world, schedule)
-    }
-    fn resume(&self, world: &mut World, time: f64) {
-        Output::resume(self, world, time)
-    }
-}
-
-impl<O: Output> IntoSpec<dyn OutputSpec> for O {
-    fn into_spec(self) -> Box<dyn OutputSpec> {
-        Box::new(self)
-    }
-}
-
-/// Registers output `O` under `O::NAME`.
-pub struct OutputPlugin<O>(PhantomData<fn() -> O>);
-
-impl<O> Default for OutputPlugin<O> {
-    fn default() -> Self {
-        OutputPlugin(PhantomData)
-    }
-}
-
-impl<O: Output> Plugin for OutputPlugin<O> {
-    fn build(&self, registries: &mut Registries) {
-        registries
-            .outputs
-            .insert(O::NAME, construct::<O, dyn OutputSpec>);
-    }
-}
+crate::item_kind!(Output, "output");
 
 /// A fixed output interval in simulated time: due at t = 0, then every `every` seconds, and
 /// at the last step.

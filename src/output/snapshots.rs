@@ -4,7 +4,7 @@
 //! Files go to `<out>/snapshots/snapshot_NNNNN.csv` with columns
 //! `t,body,x,y,vx,vy,mass,volume,pressure,shear_stress,plastic_strain_rate,plastic_strain,phase`
 //! (phase: 0 solid, 1 flowing, 2 disconnected); they feed figures and external
-//! analysis. The built-in output registers through [`super::OutputPlugin`] like a user's.
+//! analysis. The built-in output registers like a user's.
 
 use std::fmt::Write as _;
 
@@ -13,6 +13,8 @@ use serde::Deserialize;
 
 use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 use crate::step::StepSet;
 
@@ -33,17 +35,18 @@ struct SnapshotClock {
     count: usize,
 }
 
-impl Output for Snapshots {
+impl Item for Snapshots {
     const NAME: &'static str = "Snapshots";
-
     fn validate(&self) -> Result<(), String> {
         Timing::check(self.every, self.at.as_deref())
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+impl Output for Snapshots {
+    fn install(&self, sim: &mut Install) {
         let when = Timing::new(self.every, self.at.as_deref());
-        world.insert_resource(SnapshotClock { when, count: 0 });
-        schedule.add_systems(write_snapshot.in_set(StepSet::Output));
+        sim.insert_resource(SnapshotClock { when, count: 0 });
+        sim.add_systems(StepSet::Output, write_snapshot);
     }
 
     /// Snapshots were written at 0, every, 2 every, ... (or at the listed times) up to

@@ -53,6 +53,9 @@ pub struct Summary {
     pub units: BTreeMap<String, String>,
     /// The pressure front's speed, when the scene asks for `PressureFront(..)`.
     pub pressure_front: Option<crate::front::FrontMetrics>,
+    /// The sections the scene's conditions add, each under its own key.
+    #[serde(flatten)]
+    pub sections: BTreeMap<String, serde_json::Value>,
 }
 
 /// One body's final state.

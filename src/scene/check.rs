@@ -285,6 +285,14 @@ impl Scene {
                 );
             }
         }
+        for condition in &self.conditions {
+            if let Err(e) = condition.check_scene(self) {
+                return err(
+                    &format!("{}(", condition.name()),
+                    format!("{}: {e}", condition.name()),
+                );
+            }
+        }
         if let Some(cfl) = self.fixed_step_cfl()
             && cfl > 1.0
             && !self.time.allow_unstable

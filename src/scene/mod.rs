@@ -12,18 +12,19 @@ mod preset;
 pub use preset::Preset;
 
 use std::path::Path;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+use crate::condition::Condition;
 use crate::contact::Contact;
 use crate::error::SceneError;
 use crate::integration::Integration;
 use crate::material::MaterialSpec;
-use crate::output::OutputSpec;
+use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
-use crate::shape::ShapeSpec;
+use crate::shape::Shape;
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]
@@ -72,7 +73,15 @@ pub struct Scene {
     /// Extra outputs (e.g. `Snapshots(every: 0.01)`); `summary.json` and `trajectory.csv`
     /// are always written.
     #[serde(default)]
-    pub outputs: Vec<Named<dyn OutputSpec>>,
+    pub outputs: Vec<Named<dyn Output>>,
+    /// What the scene imposes on its bodies beyond material and shape (plugin items such as
+    /// `Driven(body: "intruder", velocity: (0.0, -0.5))`); none by default.
+    #[serde(default)]
+    pub conditions: Vec<Named<dyn Condition>>,
+    /// The plugins the scene was parsed against: their item catalogues, and the systems and
+    /// resources they add to every simulation built from it. Not part of the file.
+    #[serde(skip)]
+    pub registries: Arc<Registries>,
 }
 
 fn default_gravity() -> DVec2 {
@@ -254,7 +263,7 @@ pub enum Wall {
 #[serde(deny_unknown_fields)]
 pub struct BodySpec {
     pub name: String,
-    pub shape: Named<dyn ShapeSpec>,
+    pub shape: Named<dyn Shape>,
     pub material: Named<dyn MaterialSpec>,
     /// Material points per cell along each direction (2 gives the paper's 2x2 at quadrant
     /// centres); default 2.
@@ -302,10 +311,10 @@ impl Scene {
     pub fn parse(
         text: &str,
         origin: &str,
-        registries: &Rc<Registries>,
+        registries: &Arc<Registries>,
     ) -> Result<Scene, SceneError> {
-        let scene: Scene =
-            with_registries(registries, || ron_options().from_str(text)).map_err(|e| {
+        let mut scene: Scene = with_registries(registries, || ron_options().from_str(text))
+            .map_err(|e| {
                 SceneError::at(
                     origin,
                     e.span.start.line,
@@ -313,6 +322,7 @@ impl Scene {
                     e.code.to_string(),
                 )
             })?;
+        scene.registries = registries.clone();
         scene.check(text, origin)?;
         Ok(scene)
     }
@@ -324,7 +334,7 @@ impl Scene {
     pub fn load(
         path: &Path,
         sets: &[String],
-        registries: &Rc<Registries>,
+        registries: &Arc<Registries>,
     ) -> Result<(Scene, String), SceneError> {
         let origin = path.display().to_string();
         let written = std::fs::read_to_string(path)
@@ -360,9 +370,9 @@ impl Scene {
         &mut self,
         text: &str,
         origin: &str,
-        registries: &Rc<Registries>,
+        registries: &Arc<Registries>,
     ) -> Result<bool, SceneError> {
-        let output: Named<dyn OutputSpec> =
+        let output: Named<dyn Output> =
             with_registries(registries, || ron_options().from_str(text))
                 .map_err(|e| SceneError::file(origin, format!("{} in `{text}`", e.code)))?;
         output

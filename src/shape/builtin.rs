@@ -4,6 +4,7 @@ use glam::DVec2;
 use serde::Deserialize;
 
 use super::{Shape, finite, positive};
+use crate::registry::Item;
 
 /// `Rectangle(min: (x, y), max: (x, y))`: an axis-aligned rectangle.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -13,7 +14,7 @@ pub struct Rectangle {
     pub max: DVec2,
 }
 
-impl Shape for Rectangle {
+impl Item for Rectangle {
     const NAME: &'static str = "Rectangle";
     fn validate(&self) -> Result<(), String> {
         for (n, v) in [("min.x", self.min.x), ("min.y", self.min.y)] {
@@ -23,6 +24,9 @@ impl Shape for Rectangle {
         positive("width (max.x - min.x)", size.x)?;
         positive("height (max.y - min.y)", size.y)
     }
+}
+
+impl Shape for Rectangle {
     fn contains(&self, p: DVec2) -> bool {
         p.x >= self.min.x && p.x < self.max.x && p.y >= self.min.y && p.y < self.max.y
     }
@@ -43,13 +47,16 @@ pub struct Disc {
     pub radius: f64,
 }
 
-impl Shape for Disc {
+impl Item for Disc {
     const NAME: &'static str = "Disc";
     fn validate(&self) -> Result<(), String> {
         finite("centre.x", self.centre.x)?;
         finite("centre.y", self.centre.y)?;
         positive("radius", self.radius)
     }
+}
+
+impl Shape for Disc {
     fn contains(&self, p: DVec2) -> bool {
         (p - self.centre).length_squared() < self.radius * self.radius
     }
@@ -91,7 +98,7 @@ fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     o1 * o2 < 0.0 && o3 * o4 < 0.0
 }
 
-impl Shape for Polygon {
+impl Item for Polygon {
     const NAME: &'static str = "Polygon";
     fn validate(&self) -> Result<(), String> {
         if self.vertices.len() < 3 {
@@ -120,6 +127,9 @@ impl Shape for Polygon {
         }
         Ok(())
     }
+}
+
+impl Shape for Polygon {
     fn contains(&self, p: DVec2) -> bool {
         // Even-odd rule with a horizontal ray.
         let mut inside = false;
@@ -183,6 +193,6 @@ mod tests {
                 DVec2::new(0.0, 1.0),
             ],
         };
-        assert!(Shape::validate(&poly).unwrap_err().contains("cross"));
+        assert!(Item::validate(&poly).unwrap_err().contains("cross"));
     }
 }

@@ -17,6 +17,7 @@ use glam::DVec2;
 use serde::Deserialize;
 
 use super::{Shape, finite, positive};
+use crate::registry::Item;
 
 /// `TippedIntruder(tip: (x, y), width: 0.0965, slope: 1.0, corner_radius: 0.01, area: 0.011231)`.
 #[derive(Clone, Debug, Deserialize)]
@@ -179,13 +180,14 @@ fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     (p - (a + t * ab)).length()
 }
 
-impl Shape for TippedIntruder {
+impl Item for TippedIntruder {
     const NAME: &'static str = "TippedIntruder";
-
     fn validate(&self) -> Result<(), String> {
         Ok(())
     }
+}
 
+impl Shape for TippedIntruder {
     fn contains(&self, p: DVec2) -> bool {
         let n = self.inner.len();
         let inside = (0..n)

@@ -2,26 +2,18 @@
 //!
 //! Bodies are filled with material points on a lattice aligned with the grid; a shape only
 //! answers "is this position inside" and gives its bounding box. Built-in shapes
-//! (rectangle, disc, polygon) register through [`ShapePlugin`] exactly as a user's would.
+//! (rectangle, disc, polygon, the tipped intruder) register exactly as a user's would.
 
 pub mod builtin;
 pub mod intruder;
 
-use std::fmt::Debug;
-use std::marker::PhantomData;
-
 use glam::DVec2;
-use serde::de::DeserializeOwned;
 
-use crate::plugin::Plugin;
-use crate::registry::{IntoSpec, Registries, construct};
+use crate::registry::DynItem;
 
-/// A body shape. Implement this, then add `ShapePlugin::<YourType>::default()`.
-pub trait Shape: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
-    /// The name used in scene files, e.g. `Disc`.
-    const NAME: &'static str;
-    /// Checks the parameters; the message says which one is wrong and what was expected.
-    fn validate(&self) -> Result<(), String>;
+/// A body shape: an [`Item`](crate::registry::Item) (its scene name and parameter checks)
+/// that implements this, registered with `app.register::<dyn Shape, YourType>()`.
+pub trait Shape: DynItem {
     /// Whether `p` lies inside the shape.
     fn contains(&self, p: DVec2) -> bool;
     /// Axis-aligned bounding box `(min, max)`.
@@ -33,61 +25,7 @@ pub trait Shape: Clone + Debug + Send + Sync + DeserializeOwned + 'static {
     }
 }
 
-/// A shape as the scene and the body filler see it (object safe).
-pub trait ShapeSpec: Debug + Send + Sync {
-    fn name(&self) -> &'static str;
-    fn clone_spec(&self) -> Box<dyn ShapeSpec>;
-    fn validate(&self) -> Result<(), String>;
-    fn contains(&self, p: DVec2) -> bool;
-    fn bounds(&self) -> (DVec2, DVec2);
-    fn area(&self) -> Option<f64>;
-}
-
-crate::impl_named_spec!(ShapeSpec);
-
-impl<S: Shape> ShapeSpec for S {
-    fn name(&self) -> &'static str {
-        S::NAME
-    }
-    fn clone_spec(&self) -> Box<dyn ShapeSpec> {
-        Box::new(self.clone())
-    }
-    fn validate(&self) -> Result<(), String> {
-        Shape::validate(self)
-    }
-    fn contains(&self, p: DVec2) -> bool {
-        Shape::contains(self, p)
-    }
-    fn bounds(&self) -> (DVec2, DVec2) {
-        Shape::bounds(self)
-    }
-    fn area(&self) -> Option<f64> {
-        Shape::area(self)
-    }
-}
-
-impl<S: Shape> IntoSpec<dyn ShapeSpec> for S {
-    fn into_spec(self) -> Box<dyn ShapeSpec> {
-        Box::new(self)
-    }
-}
-
-/// Registers shape `S` under `S::NAME`.
-pub struct ShapePlugin<S>(PhantomData<fn() -> S>);
-
-impl<S> Default for ShapePlugin<S> {
-    fn default() -> Self {
-        ShapePlugin(PhantomData)
-    }
-}
-
-impl<S: Shape> Plugin for ShapePlugin<S> {
-    fn build(&self, registries: &mut Registries) {
-        registries
-            .shapes
-            .insert(S::NAME, construct::<S, dyn ShapeSpec>);
-    }
-}
+crate::item_kind!(Shape, "shape");
 
 /// Checks that a value is a finite number, naming it in the message.
 pub fn finite(name: &str, v: f64) -> Result<(), String> {

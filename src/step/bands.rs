@@ -11,10 +11,14 @@
 //! On a periodic y axis the first and last bands are neighbours; with an odd band count both
 //! are even, so the last band then scatters alone in a third phase.
 
+use std::marker::PhantomData;
+use std::ops::Range;
+
 use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
+use crate::integration::Footprint;
 
 /// Cell rows per band (at least 3, see the module docs).
 pub const BAND_ROWS: usize = 4;
@@ -89,6 +93,37 @@ impl Bands {
         self.start.len().saturating_sub(1)
     }
 
+    /// The nodes band `b` may scatter to on `grid` (module docs).
+    pub fn node_window(grid: &GridGeometry, b: usize) -> NodeWindow {
+        let row = grid.nodes_along(0) as u32;
+        let rows = grid.nodes_along(1) as i64;
+        let periodic = grid.periodic[1];
+        let mut first = (b * BAND_ROWS) as i64 - 1;
+        let mut last = ((b + 1) * BAND_ROWS + 2) as i64; // one past
+        if periodic {
+            first = first.rem_euclid(rows);
+            last = first + (BAND_ROWS as i64 + 3).min(rows);
+        } else {
+            first = first.max(0);
+            last = last.min(rows);
+        }
+        NodeWindow {
+            first: first as u32 * row,
+            span: (last - first) as u32 * row,
+            total: rows as u32 * row,
+            row,
+            periodic,
+        }
+    }
+
+    /// The flat indices of the cells in band `b`'s rows.
+    pub fn cells_of(grid: &GridGeometry, b: usize) -> Range<usize> {
+        let per_row = grid.cells[0];
+        let first = b * BAND_ROWS;
+        let last = ((b + 1) * BAND_ROWS).min(grid.cells[1]);
+        first * per_row..last.max(first) * per_row
+    }
+
     /// The indices of the points in band `b`.
     pub fn points(&self, b: usize) -> &[u32] {
         &self.points[self.start[b]..self.start[b + 1]]
@@ -117,19 +152,21 @@ impl Bands {
     }
 }
 
-/// A raw pointer into a slice that band scatters share. Safe to write through only for
-/// indices no other concurrently running band writes (the band construction guarantees it).
+/// A raw pointer into a slice that band scatters share, for as long as the slice is
+/// borrowed (`'a`). Safe to write through only for indices no other concurrently running
+/// band writes: the callers check each point's footprint against its band's [`NodeWindow`]
+/// (or its cell against [`Bands::cells_of`]) before writing.
 #[derive(Clone, Copy)]
-pub struct Shared<T>(*mut T, usize);
+pub struct Shared<'a, T>(*mut T, usize, PhantomData<&'a mut [T]>);
 
-// SAFETY: the pointer is only dereferenced through `add_at`, whose callers guarantee that
-// concurrently running bands touch disjoint indices.
-unsafe impl<T: Send> Send for Shared<T> {}
-unsafe impl<T: Send> Sync for Shared<T> {}
+// SAFETY: the pointer is only dereferenced through `add_at` and `set_at`, whose callers
+// guarantee that concurrently running bands touch disjoint indices.
+unsafe impl<T: Send> Send for Shared<'_, T> {}
+unsafe impl<T: Send> Sync for Shared<'_, T> {}
 
-impl<T: Copy> Shared<T> {
-    pub fn new(slice: &mut [T]) -> Self {
-        Shared(slice.as_mut_ptr(), slice.len())
+impl<'a, T: Copy> Shared<'a, T> {
+    pub fn new(slice: &'a mut [T]) -> Self {
+        Shared(slice.as_mut_ptr(), slice.len(), PhantomData)
     }
 
     /// `slice[i] = v`.
@@ -144,12 +181,11 @@ impl<T: Copy> Shared<T> {
     }
 }
 
-impl<T: Copy + std::ops::AddAssign> Shared<T> {
+impl<T: Copy + std::ops::AddAssign> Shared<'_, T> {
     /// `slice[i] += v`.
     ///
     /// # Safety
-    /// `i` must be in bounds (stencil node indices are, by construction) and no other
-    /// thread may access index `i` during the call.
+    /// `i` must be in bounds and no other thread may access index `i` during the call.
     #[inline]
     pub unsafe fn add_at(&self, i: usize, v: T) {
         debug_assert!(
@@ -159,6 +195,46 @@ impl<T: Copy + std::ops::AddAssign> Shared<T> {
         );
         // SAFETY: in bounds and exclusive, per the caller's guarantee.
         unsafe { *self.0.add(i) += v }
+    }
+}
+
+/// The nodes one band's scatter may write: the node rows from one below its first cell row
+/// to two above its last (wrapping on a periodic y axis), every column. Windows of bands
+/// that scatter at the same time are disjoint (module docs), so a point whose footprint lies
+/// in its band's window can be scattered without a lock.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeWindow {
+    /// Flat index of the window's first node.
+    first: u32,
+    /// Nodes in the window (whole rows).
+    span: u32,
+    /// Nodes of the grid.
+    total: u32,
+    /// Nodes per row.
+    row: u32,
+    periodic: bool,
+}
+
+impl NodeWindow {
+    /// Whether every node of `footprint` lies in the window, and so inside the grid.
+    ///
+    /// Each entry's node is `row[ky] + column[kx]` with the row start `r` and the column `c`
+    /// below the row length: `r + c < r + row <= total`, and its distance from `first`
+    /// (modulo the grid on a periodic axis) stays below `span`.
+    #[inline]
+    pub fn holds(&self, footprint: &Footprint) -> bool {
+        let columns_ok = footprint.column.iter().all(|&c| c < self.row);
+        let rows_ok = footprint.row.iter().all(|&r| {
+            let d = if r >= self.first {
+                r - self.first
+            } else if self.periodic {
+                r + self.total - self.first
+            } else {
+                return false;
+            };
+            r <= self.total - self.row && d <= self.span - self.row
+        });
+        columns_ok && rows_ok
     }
 }
 

@@ -38,6 +38,7 @@ impl CellDilatation {
     /// be current).
     fn sum(
         &mut self,
+        grid: &GridGeometry,
         points: &Points,
         cell: &[u32],
         bands: &Bands,
@@ -45,14 +46,25 @@ impl CellDilatation {
     ) {
         self.volume.fill(0.0);
         self.weighted.fill(0.0);
+        let cells = self.volume.len();
+        assert!(
+            self.weighted.len() == cells && grid.cells[0] * grid.cells[1] == cells,
+            "a body's cell sums do not match the grid ({cells} cells)"
+        );
         let volume = Shared::new(&mut self.volume);
         let weighted = Shared::new(&mut self.weighted);
         bands.for_each(|b| {
             let (volume, weighted) = (volume, weighted); // see `particle_to_grid`
+            let own = Bands::cells_of(grid, b);
             for &k in bands.points(b) {
                 let k = k as usize;
                 let c = cell[k] as usize;
-                // SAFETY: cell indices are in bounds; band b alone owns the cells of its rows.
+                assert!(
+                    own.contains(&c),
+                    "point {k}'s cell {c} is not in its band {b}: cells and bands disagree"
+                );
+                // SAFETY: `c` is one of band b's own cells (checked above), which are in
+                // bounds and which no other band sums into.
                 unsafe {
                     volume.add_at(c, points.volume[k]);
                     weighted.add_at(c, value(k));
@@ -77,10 +89,14 @@ impl CellDilatation {
 
 /// The cell means of the stress's in-plane trace `T_xx + T_yy` that the scatter uses in
 /// place of each point's own (the force conjugate to `average_dilatation`).
-pub fn average_stress_trace(mut bodies: Query<(&Points, &mut CellDilatation, &Bands, &Location)>) {
+pub fn average_stress_trace(
+    grid: Res<GridGeometry>,
+    mut bodies: Query<(&Points, &mut CellDilatation, &Bands, &Location)>,
+) {
+    let grid = &*grid;
     for (points, mut cells, bands, location) in &mut bodies {
         let cells = &mut *cells;
-        cells.sum(points, &location.cell, bands, |k| {
+        cells.sum(grid, points, location.cells(), bands, |k| {
             let t = points.stress[k];
             points.volume[k] * (t.xx + t.yy)
         });
@@ -102,18 +118,20 @@ pub fn average_stress_trace(mut bodies: Query<(&Points, &mut CellDilatation, &Ba
 /// (docs/numerics.md); the cell mean removes it, as selective reduced integration does for
 /// finite elements.
 pub fn average_dilatation(
+    grid: Res<GridGeometry>,
     mut bodies: Query<(&mut Points, &mut CellDilatation, &Bands, &Location)>,
 ) {
+    let grid = &*grid;
     for (mut points, mut cells, bands, location) in &mut bodies {
         let points = &mut *points;
         let cells = &mut *cells;
         // The points have not moved since `locate_points` found their cells.
-        cells.sum(points, &location.cell, bands, |k| {
+        cells.sum(grid, points, location.cells(), bands, |k| {
             let l = points.velocity_gradient[k];
             points.volume[k] * (l.x_axis.x + l.y_axis.y)
         });
         location
-            .cell
+            .cells()
             .par_iter()
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(&c, l)| {
@@ -136,12 +154,14 @@ pub fn cell_density(
 ) {
     let grid = &*grid;
     for (mut points, mut cells, mut bands, mut location) in &mut bodies {
-        let points = &mut *points;
         let cells = &mut *cells;
-        location.find_cells_after_move(grid, &points.position, &mut bands);
-        cells.sum(points, &location.cell, &bands, |k| points.mass[k]);
+        // Marked first, so that the tick the cells are found for is this system's own.
+        points.set_changed();
+        location.find_cells_after_move(grid, &points, &mut bands);
+        let points = &mut *points;
+        cells.sum(grid, points, location.cells(), &bands, |k| points.mass[k]);
         location
-            .cell
+            .cells()
             .par_iter()
             .zip(points.density.par_iter_mut())
             .for_each(|(&c, rho)| *rho = cells.per_volume(c));

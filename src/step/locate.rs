@@ -7,8 +7,12 @@
 //! Each point's cell (for the band bucketing of the lock-free scatter and for the cell
 //! averages) is found here too, and found again once the points have moved when the cell
 //! averages need it (`cell_average::cell_density`); the next step's `locate_points` then reuses
-//! those cells and bands instead of finding them again (the points do not move in between).
+//! those cells and bands instead of finding them again, unless the points were written in
+//! between (bevy's change detection; the stress update writes them without marking them).
+//! Nothing here is trusted by the lock-free scatter: it checks each point against its band
+//! (`bands::NodeWindow`), so a stale cell is a panic, never a data race.
 
+use bevy_ecs::change_detection::Tick;
 use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
@@ -22,20 +26,30 @@ use crate::integration::{Footprint, Scheme};
 #[derive(Component, Clone, Debug, Default)]
 pub struct Location {
     /// Footprints at the start of the step (positions before this step's move).
-    pub footprint: Vec<Footprint>,
+    footprint: Vec<Footprint>,
     /// The cell of each point's current position.
-    pub cell: Vec<u32>,
+    cell: Vec<u32>,
     /// The band of each point's current position (`bands`).
     band: Vec<u32>,
-    /// `cell`, `band` and the body's `Bands` are those of the points' current positions:
-    /// set when the cells are found after the move, spent by the next `locate_points`, and
-    /// cleared by whoever hands out the positions for writing (`Simulation::points_mut`).
-    current: bool,
+    /// The change tick of the body's `Points` when `cell`, `band` and its `Bands` were found
+    /// after the move: the next `locate_points` reuses them only if `Points` has not been
+    /// written since (a plugin system that moves points marks it, as any `Mut` does).
+    found_for: Option<Tick>,
 }
 
 impl Location {
+    /// Each point's footprint, built by this step's `locate_points`.
+    pub fn footprints(&self) -> &[Footprint] {
+        &self.footprint
+    }
+
+    /// Each point's cell (flat index).
+    pub fn cells(&self) -> &[u32] {
+        &self.cell
+    }
+
     /// Finds the cells of `positions` and rebuckets `bands` by them.
-    pub fn find_cells(&mut self, grid: &GridGeometry, positions: &[DVec2], bands: &mut Bands) {
+    fn find_cells(&mut self, grid: &GridGeometry, positions: &[DVec2], bands: &mut Bands) {
         let inv_h = 1.0 / grid.cell_size;
         self.cell.resize(positions.len(), 0);
         self.band.resize(positions.len(), 0);
@@ -51,32 +65,34 @@ impl Location {
         bands.rebuild(grid, &self.band);
     }
 
-    /// Finds the cells after the points moved; the next step's `locate_points` reuses them.
+    /// Finds the cells after the points moved; the next step's `locate_points` reuses them
+    /// unless `points` is written again first.
     pub fn find_cells_after_move(
         &mut self,
         grid: &GridGeometry,
-        positions: &[DVec2],
+        points: &Mut<Points>,
         bands: &mut Bands,
     ) {
-        self.find_cells(grid, positions, bands);
-        self.current = true;
+        self.find_cells(grid, &points.position, bands);
+        self.found_for = Some(points.last_changed());
     }
 
-    /// The positions may have changed outside the step: the cells must be found again.
+    /// The positions may have changed outside the schedule: the cells must be found again.
     pub fn invalidate(&mut self) {
-        self.current = false;
+        self.found_for = None;
     }
 }
 
-/// Rebuilds every body's footprints, cells and bands from the points' current positions.
+/// Rebuilds every body's footprints, and its cells and bands unless those found after the
+/// last move are still current.
 pub fn locate_points<S: Scheme>(
     grid: Res<GridGeometry>,
-    mut bodies: Query<(&Points, &mut Location, &mut Bands)>,
+    mut bodies: Query<(Ref<Points>, &mut Location, &mut Bands)>,
 ) {
     let grid = &*grid;
     for (points, mut location, mut bands) in &mut bodies {
         let location = &mut *location;
-        if !std::mem::take(&mut location.current) {
+        if location.found_for.take() != Some(points.last_changed()) {
             location.find_cells(grid, &points.position, &mut bands);
         }
         location

@@ -70,6 +70,14 @@ fn scatter_body<const APIC: bool>(
     cells: Option<&CellDilatation>,
 ) {
     let normals = !field.mass_gradient.is_empty();
+    let nodes = grid.node_count();
+    assert!(
+        field.mass.len() == nodes
+            && field.momentum.len() == nodes
+            && field.force.len() == nodes
+            && (!normals || field.mass_gradient.len() == nodes),
+        "a body's nodal field does not match the grid ({nodes} nodes)"
+    );
     let mass = Shared::new(&mut field.mass);
     let momentum = Shared::new(&mut field.momentum);
     let force = Shared::new(&mut field.force);
@@ -78,24 +86,31 @@ fn scatter_body<const APIC: bool>(
         // Local copies: the stores below could otherwise alias the captured pointers,
         // which the compiler then reloads for every entry.
         let (mass, momentum, force, gradient) = (mass, momentum, force, gradient);
+        let window = Bands::node_window(grid, b);
         for &p in bands.points(b) {
             let p = p as usize;
-            let f = &location.footprint[p];
+            let f = &location.footprints()[p];
+            // What makes the unsafe writes below sound: checked here, not trusted.
+            assert!(
+                window.holds(f),
+                "point {p} reaches outside the nodes of its band {b}: its cell is stale \
+                 (points moved since their cells were found) or its extent exceeds half a cell"
+            );
             let m = points.mass[p];
             let momentum_at = NodeMomentum::of::<APIC>(points, p, f, grid);
             let mg = m * g;
             let vol = points.volume[p];
             let mut t = points.stress[p];
             if let Some(cells) = cells {
-                let shift = 0.5 * (cells.stress_trace(location.cell[p]) - t.xx - t.yy);
+                let shift = 0.5 * (cells.stress_trace(location.cells()[p]) - t.xx - t.yy);
                 t.xx += shift;
                 t.yy += shift;
             }
             // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
             let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
             f.for_each_indexed(|kx, ky, n, w, grad| {
-                // SAFETY: footprint nodes are in bounds, and bands scattering at the same
-                // time touch disjoint node rows (bands module).
+                // SAFETY: the footprint lies in the band's window (checked above), inside
+                // the field, and bands scattering at the same time have disjoint windows.
                 unsafe {
                     mass.add_at(n, w * m);
                     momentum.add_at(n, w * momentum_at.at(kx, ky));
@@ -197,7 +212,7 @@ impl VelocityUpdate<'_, '_> {
 pub fn grid_to_particle(mut bodies: VelocityUpdate) {
     bodies.each(|_, points, location, field, dt, pull| {
         location
-            .footprint
+            .footprints()
             .par_iter()
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
@@ -252,7 +267,7 @@ fn gather_affine<S: Scheme>(
     update: Option<(f64, f64)>,
 ) {
     location
-        .footprint
+        .footprints()
         .par_iter()
         .zip(points.position.par_iter())
         .zip(points.velocity.par_iter_mut())
@@ -285,7 +300,7 @@ fn gather_affine<S: Scheme>(
 pub fn musl_velocity(mut bodies: VelocityUpdate) {
     bodies.each(|_, points, location, field, dt, pull| {
         location
-            .footprint
+            .footprints()
             .par_iter()
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
@@ -312,7 +327,7 @@ pub fn musl_remap(
     for (points, location, mut field) in &mut bodies {
         let field = &mut *field;
         field.momentum.fill(DVec2::ZERO);
-        for (k, f) in location.footprint.iter().enumerate() {
+        for (k, f) in location.footprints().iter().enumerate() {
             let mv = points.mass[k] * points.velocity[k];
             f.for_each_indexed(|_, _, n, w, _| field.momentum[n] += w * mv);
         }
@@ -332,7 +347,7 @@ pub fn musl_remap(
 pub fn musl_gradient(mut bodies: Query<(&mut Points, &Location, &GridField)>) {
     for (mut points, location, field) in &mut bodies {
         location
-            .footprint
+            .footprints()
             .par_iter()
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(f, l)| *l = f.interpolate_with_gradient(&field.velocity).1);

@@ -13,7 +13,7 @@
 pub mod plot;
 
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::plan::BatchFile;
 use crate::poncelet::{Derivatives, fit, load_run};
@@ -38,7 +38,7 @@ fn fail(what: &str, e: impl std::fmt::Display) -> Error {
 
 /// Runs what is missing under `runs` and draws every figure into `out`; returns the files.
 pub fn make_figures(
-    registries: &Rc<Registries>,
+    registries: &Arc<Registries>,
     scenes: &Path,
     runs: &Path,
     out: &Path,
@@ -52,7 +52,6 @@ pub fn make_figures(
     let impact = std::path::absolute(&impact).map_err(|e| fail("scenes", e))?;
     let speeds: Vec<String> = SPEEDS.iter().map(|v| format!("\"(0.0, -{v})\"")).collect();
     let slopes: Vec<String> = SLOPES.iter().map(|s| format!("\"{s}\"")).collect();
-    let shared: Registries = (**registries).clone();
     let sweep = |name: &str, set: &str, vary: String| -> Result<PathBuf, Error> {
         let file = runs.join(format!("{name}.ron"));
         let text = format!(
@@ -63,7 +62,7 @@ pub fn make_figures(
         let spec = Sweep::load(&file)?;
         let dir = runs.join(name);
         report(&format!("sweep {name}: {} runs", spec.plan().len()));
-        run_local(&file, &spec, &dir, jobs, || Rc::new(shared.clone()), report)?;
+        run_local(&file, &spec, &dir, jobs, registries, report)?;
         Ok(dir)
     };
     let speed_axis = format!(

@@ -1,13 +1,15 @@
 //! An example plugin: an axis-aligned ellipse as a body shape.
 //!
 //! It uses only regolith's public API, exactly as a user's plugin would: implement
-//! [`regolith::shape::Shape`] for a parameter type and register it with
-//! [`regolith::shape::ShapePlugin`]. A scene then writes
+//! [`regolith::registry::Item`] (its scene name and checks) and [`regolith::shape::Shape`] for
+//! a parameter type and register it with `app.register::<dyn Shape, Ellipse>()`. A scene then
+//! writes
 //! `shape: Ellipse(centre: (0.5, 0.5), semi_axes: (0.2, 0.1))`.
 
 use regolith::glam::DVec2;
-use regolith::shape::{Shape, ShapePlugin, finite, positive};
-use regolith::{Plugin, registry::Registries};
+use regolith::registry::Item;
+use regolith::shape::{Shape, finite, positive};
+use regolith::{Plugin, Regolith};
 use serde::Deserialize;
 
 /// `Ellipse(centre: (x, y), semi_axes: (a, b))`.
@@ -18,16 +20,17 @@ pub struct Ellipse {
     pub semi_axes: DVec2,
 }
 
-impl Shape for Ellipse {
+impl Item for Ellipse {
     const NAME: &'static str = "Ellipse";
-
     fn validate(&self) -> Result<(), String> {
         finite("centre.x", self.centre.x)?;
         finite("centre.y", self.centre.y)?;
         positive("semi_axes.0", self.semi_axes.x)?;
         positive("semi_axes.1", self.semi_axes.y)
     }
+}
 
+impl Shape for Ellipse {
     fn contains(&self, p: DVec2) -> bool {
         ((p - self.centre) / self.semi_axes).length_squared() < 1.0
     }
@@ -46,7 +49,7 @@ impl Shape for Ellipse {
 pub struct EllipsePlugin;
 
 impl Plugin for EllipsePlugin {
-    fn build(&self, registries: &mut Registries) {
-        ShapePlugin::<Ellipse>::default().build(registries);
+    fn build(&self, app: &mut Regolith) {
+        app.register::<dyn Shape, Ellipse>();
     }
 }

@@ -38,9 +38,9 @@ mod legend;
 mod record;
 
 use regolith::bevy_ecs::prelude::*;
-use regolith::output::{Output, OutputPlugin};
-use regolith::plugin::Plugin;
-use regolith::registry::Registries;
+use regolith::output::Output;
+use regolith::plugin::{Install, Plugin, Regolith};
+use regolith::registry::Item;
 use regolith::step::StepSet;
 use serde::Deserialize;
 
@@ -69,9 +69,8 @@ pub struct Rerun {
     pub grid: bool,
 }
 
-impl Output for Rerun {
+impl Item for Rerun {
     const NAME: &'static str = "Rerun";
-
     fn validate(&self) -> Result<(), String> {
         if self.file.is_none() && !self.spawn {
             return Err("give a file (an .rrd path) or spawn: true, or both".into());
@@ -84,10 +83,12 @@ impl Output for Rerun {
         }
         Ok(())
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(record::Recorder::new(self.clone()));
-        schedule.add_systems(record::record.in_set(StepSet::Output));
+impl Output for Rerun {
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(record::Recorder::new(self.clone()));
+        sim.add_systems(StepSet::Output, record::record);
     }
 }
 
@@ -95,7 +96,7 @@ impl Output for Rerun {
 pub struct RerunPlugin;
 
 impl Plugin for RerunPlugin {
-    fn build(&self, registries: &mut Registries) {
-        OutputPlugin::<Rerun>::default().build(registries);
+    fn build(&self, app: &mut Regolith) {
+        app.register::<dyn Output, Rerun>();
     }
 }

@@ -17,6 +17,8 @@ use serde::Deserialize;
 use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::grid::{GridField, GridGeometry};
+use crate::plugin::Install;
+use crate::registry::Item;
 use crate::sim::Clock;
 use crate::step::StepSet;
 pub use xml::{Entry, read_collection};
@@ -141,9 +143,8 @@ struct VtkState {
     carry_over: Option<f64>,
 }
 
-impl Output for Vtk {
+impl Item for Vtk {
     const NAME: &'static str = "Vtk";
-
     fn validate(&self) -> Result<(), String> {
         Timing::check(self.every, self.at.as_deref())?;
         if let Some(fields) = &self.fields
@@ -156,9 +157,11 @@ impl Output for Vtk {
         }
         Ok(())
     }
+}
 
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
-        world.insert_resource(VtkState {
+impl Output for Vtk {
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(VtkState {
             when: Timing::new(self.every, self.at.as_deref()),
             fields: self.fields.clone().unwrap_or(VtkField::ALL.to_vec()),
             grid: self.grid,
@@ -167,7 +170,7 @@ impl Output for Vtk {
             nodes: Vec::new(),
             carry_over: None,
         });
-        schedule.add_systems(write_frame.in_set(StepSet::Output));
+        sim.add_systems(StepSet::Output, write_frame);
     }
 
     /// Frames were written at 0, every, 2 every, ... (or the listed times) before `time`;

@@ -1,0 +1,232 @@
+//! An example plugin: a body driven at a prescribed velocity, and the force that takes.
+//!
+//! `conditions: [Driven(body: "intruder", velocity: (0.0, -0.5))]` keeps every grid node of
+//! the body moving at `velocity` after the contact step, whatever the grains push. The
+//! momentum that takes, `F = sum_i m_i (v - v_i) / dt` over the body's nodes, is the force
+//! the driver applies; with the body's weight `m g` and the contact force `C` the grains
+//! exert, a body at constant velocity has `F + m g + C = 0`. At a slow constant speed the
+//! grains' resistance `C_y` as a function of depth is the static drag `f(z)` of the
+//! paper's Poncelet law (its `h v^2` term vanishes with `v`), measured directly instead of
+//! fitted from decelerating impacts.
+//!
+//! Written only against regolith's public API: an [`Item`] and a
+//! [`Condition`] registered by [`DrivenIntruderPlugin`], a system in the `Contact` set that
+//! drives the nodes, one in the `Output` set that records `driven.csv`, and a `driven`
+//! section in `summary.json`.
+
+use regolith::bevy_ecs::prelude::*;
+use regolith::body::{Body, Points};
+use regolith::condition::Condition;
+use regolith::glam::DVec2;
+use regolith::grid::GridField;
+use regolith::output::{OutputFaults, RunDir, write_atomic};
+use regolith::plugin::{Install, Plugin, Regolith};
+use regolith::registry::Item;
+use regolith::scene::Scene;
+use regolith::sim::Clock;
+use regolith::step::{StepSet, output_due};
+use serde::Deserialize;
+
+/// `Driven(body: "intruder", velocity: (0.0, -0.5))`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Driven {
+    /// The body to drive (by name).
+    pub body: String,
+    /// Its prescribed velocity (m/s); the body should start with it (`velocity` of the body).
+    pub velocity: DVec2,
+}
+
+impl Item for Driven {
+    const NAME: &'static str = "Driven";
+    fn validate(&self) -> Result<(), String> {
+        if self.velocity.is_finite() {
+            Ok(())
+        } else {
+            Err(format!("velocity must be finite, got {}", self.velocity))
+        }
+    }
+}
+
+impl Condition for Driven {
+    fn check_scene(&self, scene: &Scene) -> Result<(), String> {
+        let Some(body) = scene.bodies.iter().find(|b| b.name == self.body) else {
+            return Err(format!("no body named \"{}\" in the scene", self.body));
+        };
+        if body.velocity != self.velocity {
+            return Err(format!(
+                "body \"{}\" starts at {} but is driven at {}: give it the driven velocity",
+                self.body, body.velocity, self.velocity
+            ));
+        }
+        Ok(())
+    }
+
+    fn install(&self, sim: &mut Install) {
+        sim.insert_resource(Drive {
+            spec: self.clone(),
+            force: DVec2::ZERO,
+            contact: DVec2::ZERO,
+            rows: Vec::new(),
+            resumed_at: None,
+        });
+        sim.add_systems(StepSet::Contact, drive);
+        sim.add_systems(StepSet::Output, record.run_if(output_due));
+    }
+
+    fn summary(&self, world: &World) -> Option<(String, serde_json::Value)> {
+        let drive = world.get_resource::<Drive>()?;
+        let last = drive.rows.last();
+        let section = serde_json::json!({
+            "body": self.body,
+            "velocity": self.velocity.to_array(),
+            "rows": drive.rows.len(),
+            "final_bottom": last.map(|r| r.bottom),
+            "final_drive_force": last.map(|r| r.force.to_array()),
+            "final_contact_force": last.map(|r| r.contact.to_array()),
+            "max_resistance": drive.rows.iter().map(|r| r.contact.y).fold(f64::NEG_INFINITY, f64::max),
+        });
+        Some(("driven".to_string(), section))
+    }
+
+    fn resume(&self, world: &mut World, time: f64) {
+        world.resource_mut::<Drive>().resumed_at = Some(time);
+    }
+}
+
+/// One recorded instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    pub time: f64,
+    /// Lowest point of the body (its tip), m.
+    pub bottom: f64,
+    /// Force the driver applied over the last step, N per metre of thickness.
+    pub force: DVec2,
+    /// Force the other bodies exerted through contact over the last step.
+    pub contact: DVec2,
+}
+
+/// The driver's state: the last step's forces and the recorded rows.
+#[derive(Resource, Debug)]
+pub struct Drive {
+    pub spec: Driven,
+    /// The driver's force over the last step.
+    pub force: DVec2,
+    /// The contact force on the body over the last step.
+    pub contact: DVec2,
+    pub rows: Vec<Row>,
+    /// The time a resumed run started from: the rows written before it are read back from
+    /// `driven.csv` at the first record.
+    resumed_at: Option<f64>,
+}
+
+/// Sets every node of the driven body to the prescribed velocity after contact, and keeps
+/// the force that took. The acceleration is corrected with the velocity, so the FLIP update
+/// of the body's points leaves them at the prescribed velocity too.
+fn drive(clock: Res<Clock>, mut state: ResMut<Drive>, mut bodies: Query<(&Body, &mut GridField)>) {
+    let dt = clock.dt;
+    let target = state.spec.velocity;
+    let Some((_, mut field)) = bodies.iter_mut().find(|(b, _)| b.name == state.spec.body) else {
+        return;
+    };
+    let field = &mut *field;
+    let mut force = DVec2::ZERO;
+    for n in 0..field.mass.len() {
+        let m = field.mass[n];
+        if m > 0.0 {
+            let change = target - field.velocity[n];
+            force += m * change / dt;
+            field.acceleration[n] += change / dt;
+            field.velocity[n] = target;
+            field.momentum[n] = m * target;
+        }
+    }
+    state.force = force;
+    state.contact = field.contact_force;
+}
+
+/// Records a row at each output time and rewrites `driven.csv` in the run directory.
+fn record(
+    clock: Res<Clock>,
+    dir: Res<RunDir>,
+    faults: Res<OutputFaults>,
+    mut state: ResMut<Drive>,
+    bodies: Query<(&Body, &Points)>,
+) {
+    let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == state.spec.body) else {
+        return;
+    };
+    let bottom = points
+        .position
+        .iter()
+        .map(|x| x.y)
+        .fold(f64::INFINITY, f64::min);
+    let row = Row {
+        time: clock.time,
+        bottom,
+        force: state.force,
+        contact: state.contact,
+    };
+    let Some(dir) = &dir.0 else {
+        state.rows.push(row);
+        return;
+    };
+    let path = dir.join("driven.csv");
+    if let Some(from) = state.resumed_at.take() {
+        match read_rows(&path, from) {
+            Ok(rows) => state.rows = rows,
+            Err(e) => faults.report(&clock, format!("cannot read {}: {e}", path.display())),
+        }
+    }
+    state.rows.push(row);
+    if let Err(e) = write_atomic(&path, to_csv(&state.rows).as_bytes()) {
+        faults.report(&clock, format!("cannot write {}: {e}", path.display()));
+    }
+}
+
+const HEADER: &str = "time,bottom,drive_fx,drive_fy,contact_fx,contact_fy";
+
+fn to_csv(rows: &[Row]) -> String {
+    let mut text = format!("{HEADER}\n");
+    for r in rows {
+        text += &format!(
+            "{:?},{:?},{:?},{:?},{:?},{:?}\n",
+            r.time, r.bottom, r.force.x, r.force.y, r.contact.x, r.contact.y
+        );
+    }
+    text
+}
+
+/// The rows of `driven.csv` up to `time` (a resumed run keeps what it had written).
+pub fn read_rows(path: &std::path::Path, time: f64) -> Result<Vec<Row>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    let mut rows = Vec::new();
+    for (k, line) in text.lines().enumerate().skip(1) {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("line {}: {e}", k + 1))?;
+        let [t, bottom, fx, fy, cx, cy] = v[..] else {
+            return Err(format!("line {}: expected 6 columns ({HEADER})", k + 1));
+        };
+        if t <= time {
+            rows.push(Row {
+                time: t,
+                bottom,
+                force: DVec2::new(fx, fy),
+                contact: DVec2::new(cx, cy),
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Adds the `Driven` condition.
+pub struct DrivenIntruderPlugin;
+
+impl Plugin for DrivenIntruderPlugin {
+    fn build(&self, app: &mut Regolith) {
+        app.register::<dyn Condition, Driven>();
+    }
+}
