@@ -4,9 +4,9 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use regolith::bevy_ecs::system::RunSystemOnce;
 use regolith::contact::frictional;
-use regolith::integration::{CpdiFixed, Footprint, Scheme};
 use regolith::material::granular::MuI;
 use regolith::material::update_stress;
+use regolith::shape_functions::{CpdiFixed, Footprint, Scheme};
 use regolith::sim::on_worker;
 use regolith::step::transfer::{grid_to_particle, particle_to_grid};
 use regolith::step::{locate_points, update_grid};

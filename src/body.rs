@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::stress::Stress;
 
-/// The material points of one body (SCIENCE.md 1).
+/// The material points of one body (docs/model.md §1).
 #[derive(Component, Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Points {
     pub position: Vec<DVec2>,

@@ -6,8 +6,8 @@
 
 use glam::DVec2;
 
+use crate::geometry::Shape;
 use crate::grid::GridGeometry;
-use crate::shape::Shape;
 
 /// The positions of a filled shape.
 pub struct Lattice {

@@ -1,14 +1,14 @@
 //! The background grid: its geometry (a resource) and one body's nodal field (a component).
 //!
 //! Every body keeps its own nodal field so that contact can compare bodies node by node
-//! (SCIENCE.md 2 and 5). Fields are struct-of-arrays so the scatter and gather loops run over
+//! (docs/model.md §2 and §5). Fields are struct-of-arrays so the scatter and gather loops run over
 //! plain slices.
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::integration::fast_floor;
+use crate::shape_functions::fast_floor;
 
 /// Cartesian grid of square cells covering the rectangular domain.
 ///
@@ -101,7 +101,7 @@ pub struct GridField {
     /// Mass gradient `sum_p m_p grad S_i(x_p)` (out of the body at its surface nodes);
     /// filled only when contact needs normals.
     pub mass_gradient: Vec<DVec2>,
-    /// Nodes lighter than this carry no velocity (SCIENCE.md 2, step 4).
+    /// Nodes lighter than this drop their internal force (docs/model.md §2, step 3).
     pub mass_tolerance: f64,
     /// Total force the other bodies exert on this one through contact this step (N per
     /// metre of thickness); zero for a lone body.

@@ -18,6 +18,9 @@ use crate::error::SceneError;
 use crate::flow_field::FlowField;
 use crate::free_surface::FreeSurface;
 use crate::front::PressureFront;
+use crate::geometry::Shape;
+use crate::geometry::builtin::{Disc, Polygon, Rectangle};
+use crate::geometry::intruder::TippedIntruder;
 use crate::impact::Impact;
 use crate::material::MaterialSpec;
 use crate::material::elastic::LinearElastic;
@@ -27,9 +30,6 @@ use crate::output::snapshots::Snapshots;
 use crate::output::vtk::Vtk;
 use crate::registry::{IntoKind, Item, Kind, Registries};
 use crate::scene::Scene;
-use crate::shape::Shape;
-use crate::shape::builtin::{Disc, Polygon, Rectangle};
-use crate::shape::intruder::TippedIntruder;
 use crate::step::{Core, StepSet};
 
 /// Something that adds scene items, systems or resources to regolith.

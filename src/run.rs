@@ -340,7 +340,7 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
         .map(|(spec, n)| {
             n * (crate::body::Points::BYTES_PER_POINT
                 + affine
-                + crate::integration::Footprint::BYTES
+                + crate::shape_functions::Footprint::BYTES
                 + spec.material.history_bytes())
                 + nodes
                     * GridField::bytes_per_node(

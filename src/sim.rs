@@ -83,7 +83,7 @@ pub fn on_worker<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     }
 }
 
-/// Mass tolerance of a body's nodes: `1e-8 rho h^2` per unit thickness (SCIENCE.md 2, step 4).
+/// Mass tolerance of a body's nodes: `1e-8 rho h^2` per unit thickness (docs/model.md §2, step 3).
 fn mass_tolerance(density: f64, h: f64) -> f64 {
     1e-8 * density * h * h
 }

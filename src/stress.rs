@@ -1,7 +1,7 @@
 //! Plane-strain Cauchy stress with its four independent components.
 //!
 //! In plane strain `D_zz = 0` but `T_zz != 0`, so the stress carries `xx, yy, xy, zz`
-//! (SCIENCE.md, notation). Tension is positive; the pressure is `p = -tr(T)/3`.
+//! (docs/model.md, conventions). Tension is positive; the pressure is `p = -tr(T)/3`.
 
 use glam::{DMat2, DVec2};
 use serde::{Deserialize, Serialize};
@@ -65,11 +65,6 @@ impl Stress {
         }
     }
 
-    /// The in-plane 2x2 block.
-    pub fn in_plane(&self) -> DMat2 {
-        DMat2::from_cols(DVec2::new(self.xx, self.xy), DVec2::new(self.xy, self.yy))
-    }
-
     /// Traction on a plane with unit normal `n` (in-plane part).
     pub fn traction(&self, n: DVec2) -> DVec2 {
         DVec2::new(self.xx * n.x + self.xy * n.y, self.xy * n.x + self.yy * n.y)
@@ -79,7 +74,7 @@ impl Stress {
         self.xx.is_finite() && self.yy.is_finite() && self.xy.is_finite() && self.zz.is_finite()
     }
 
-    /// Trial hypoelastic update with the Jaumann rate (SCIENCE.md 4, step 1):
+    /// Trial hypoelastic update with the Jaumann rate (docs/model.md §4.1, step 1):
     /// `T* = T + dt (2G D0 + K tr(D) 1 + W T - T W)` with `D_zz = 0`.
     /// `l` is the velocity gradient `L_ab = d v_a / d x_b` (glam is column-major:
     /// `l.col(b)[a]`).

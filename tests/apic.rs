@@ -16,8 +16,8 @@ use common::Rng;
 use regolith::Simulation;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::integration::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 use regolith::plugin::parse_scene;
+use regolith::shape_functions::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 use regolith::step::transfer::apic_gather;
 
 fn grid() -> GridGeometry {

@@ -1,4 +1,4 @@
-//! Frictional contact between bodies (SCIENCE.md 5).
+//! Frictional contact between bodies (docs/model.md §5).
 
 mod common;
 

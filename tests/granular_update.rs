@@ -1,5 +1,5 @@
 //! The trans-phase constitutive update alone, driven by prescribed L, dt and density
-//! (SCIENCE.md 4, "properties to test"). Parameters are the paper's PS-1 discs.
+//! (docs/model.md §4.1). Parameters are the paper's PS-1 discs.
 
 use proptest::prelude::*;
 use regolith::body::Phase;

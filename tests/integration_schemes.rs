@@ -4,7 +4,7 @@
 use proptest::prelude::*;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::integration::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
+use regolith::shape_functions::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 
 fn grid(periodic: [bool; 2]) -> GridGeometry {
     GridGeometry {

@@ -3,8 +3,8 @@
 
 mod common;
 
-use regolith::integration::Integration;
 use regolith::scene::{Preset, TimeStep};
+use regolith::shape_functions::Integration;
 
 #[test]
 fn presets_set_the_studied_knobs_relative_to_the_scene() {

@@ -15,8 +15,8 @@ mod common;
 
 use common::Rng;
 use regolith::Simulation;
-use regolith::integration::{CpdiFixed, Footprint};
 use regolith::plugin::parse_scene;
+use regolith::shape_functions::{CpdiFixed, Footprint};
 
 /// p-wave speed of the block's material: E = 1 MPa, nu = 0.3, rho = 1000 kg/m^3.
 fn wave_speed() -> f64 {

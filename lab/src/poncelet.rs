@@ -1,4 +1,4 @@
-//! The Poncelet drag fit of the paper's section 4.2 (SCIENCE.md 6.2): `regolith fit`.
+//! The Poncelet drag fit of the paper's section 4.2 (docs/model.md §7.2): `regolith fit`.
 //!
 //! The intruder's depth below the point of first contact, `z(t)` (positive downwards), is
 //! assumed to obey `m z'' = m g - f(z) - h(z) z'^2` with a static term `f` and a collisional

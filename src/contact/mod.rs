@@ -5,7 +5,7 @@
 //! * `NoSlip`, the classic MPM default: at every node where two or more bodies have mass all
 //!   of them take the nodes' common centre-of-mass velocity.
 //! * `Frictional(friction: mu)`: Bardenhagen et al. (2001) as refined by Huang et al. (2011),
-//!   run once per step before the stress update (update-stress-last form, SCIENCE.md 5).
+//!   run once per step before the stress update (update-stress-last form, docs/model.md §5).
 //!   At a shared node each body is compared with the centre of mass of all bodies there:
 //!   with `dv = v~_b - v_cm` and the unit normal `n` from body b towards the others (from the
 //!   bodies' mass gradients), it acts only if `dv . n > 0` (approaching): it removes the

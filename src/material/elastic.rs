@@ -1,5 +1,5 @@
 //! Linear hypoelastic solid: the Jaumann-rate law with constant moduli, no yield and no
-//! density cut-off (the paper's intruder; SCIENCE.md 4, "Intruder").
+//! density cut-off (the paper's intruder; docs/model.md §4.2).
 
 use serde::Deserialize;
 
@@ -86,7 +86,7 @@ mod tests {
 
     #[test]
     fn moduli_match_the_paper_ps1_values() {
-        // SCIENCE.md 4: PS-1 (E = 20 MPa, nu = 0.45) has G = 6.897 MPa, K = 66.67 MPa.
+        // docs/model.md §7: PS-1 (E = 20 MPa, nu = 0.45) has G = 6.897 MPa, K = 66.67 MPa.
         let (g, k) = moduli(20e6, 0.45);
         assert!((g - 6.897e6).abs() < 1e3);
         assert!((k - 66.67e6).abs() < 1e4);

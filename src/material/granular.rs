@@ -1,4 +1,4 @@
-//! The trans-phase granular material of the paper (SCIENCE.md 4): a hypoelastic solid below
+//! The trans-phase granular material of the paper (docs/model.md §4.1): a hypoelastic solid below
 //! the yield surface, mu(I) plastic flow on it, and a stress-free disconnected phase below
 //! the critical density or in tension.
 //!
@@ -49,7 +49,7 @@ impl TransPhase {
         gdp * self.grain_diameter * (self.grain_density / p).sqrt()
     }
 
-    /// One step of the update at one point (SCIENCE.md 4, steps 1-5).
+    /// One step of the update at one point (docs/model.md §4.1, steps 1-5).
     pub fn update(&self, stress: &mut Stress, step: &PointStep) -> PointOutcome {
         let (g, dt) = (self.shear, step.dt);
         let trial = stress.jaumann_elastic_trial(step.velocity_gradient, dt, g, self.bulk);
@@ -84,7 +84,7 @@ impl TransPhase {
     }
 
     /// Quiet start: the volume at which density and pressure agree with the hypoelastic law,
-    /// `rho = rho_c exp(p / K)` (SCIENCE.md 4).
+    /// `rho = rho_c exp(p / K)` (docs/model.md §1).
     pub fn initial_volume(&self, mass: f64, stress: &Stress) -> f64 {
         mass / self.critical_density * (-stress.pressure() / self.bulk).exp()
     }
@@ -300,7 +300,7 @@ macro_rules! trans_phase_material {
             fn wave_speed(&self) -> f64 {
                 self.0.wave_speed()
             }
-            /// Isotropic lithostatic start, as the authors used (SCIENCE.md 4).
+            /// Isotropic lithostatic start, as the authors used (docs/model.md §1).
             fn lithostatic_ratio(&self) -> f64 {
                 1.0
             }

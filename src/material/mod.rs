@@ -159,7 +159,7 @@ pub struct MaterialState<M: Material> {
     pub history: Vec<M::History>,
 }
 
-/// The constitutive update of every body made of `M` (SCIENCE.md 2, step 7).
+/// The constitutive update of every body made of `M` (docs/model.md §2, step 7).
 pub fn update_stress<M: Material>(
     clock: Res<Clock>,
     mut bodies: Query<(&mut Points, &mut PointStates, &mut MaterialState<M>)>,

@@ -7,7 +7,7 @@ use crate::contact::{Contact, NormalRule};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
-use crate::integration::Integration;
+use crate::shape_functions::Integration;
 use glam::DVec2;
 
 /// Largest grid (cells) and body (points) a scene may ask for: beyond these the state

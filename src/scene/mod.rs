@@ -20,11 +20,11 @@ use serde::{Deserialize, Serialize};
 use crate::condition::Condition;
 use crate::contact::Contact;
 use crate::error::SceneError;
-use crate::integration::Integration;
+use crate::geometry::Shape;
 use crate::material::MaterialSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
-use crate::shape::Shape;
+use crate::shape_functions::Integration;
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]

@@ -18,7 +18,7 @@ use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
-use crate::integration::Footprint;
+use crate::shape_functions::Footprint;
 
 /// Cell rows per band (at least 3, see the module docs).
 pub const BAND_ROWS: usize = 4;

@@ -1,10 +1,10 @@
-//! Nodal momentum update and walls (SCIENCE.md 2, steps 2-4).
+//! Nodal momentum update and walls (docs/model.md §2, step 3).
 //!
 //! `(mv) += dt f`, `a = f/m`, `v = (mv)/m` on nodes heavier than the body's mass tolerance.
-//! Lighter nodes (SCIENCE.md 2, step 4) drop their internal force, whose acceleration
+//! Lighter nodes (docs/model.md §2, step 3) drop their internal force, whose acceleration
 //! `f/m` is unbounded as `m -> 0` with linear shape functions, but keep the velocity of
 //! their few contributing points plus gravity: `a = g`, `v = (mv)/m + dt g`. Zeroing their
-//! velocity instead, as SCIENCE.md suggests, gives every contributing point a spurious
+//! velocity instead, as is usual, gives every contributing point a spurious
 //! velocity gradient `-v (outer) grad S` of order `|v|/h`; the free-fall test caught a body
 //! blowing up that way (docs/numerics.md). Empty nodes get zero velocity.
 //! Walls then zero the normal (Slip) or both (NoSlip) components of force, momentum,

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use super::bands::{BAND_ROWS, Bands};
 use crate::body::Points;
 use crate::grid::GridGeometry;
-use crate::integration::{Footprint, Scheme};
+use crate::shape_functions::{Footprint, Scheme};
 
 /// Where a body's points are (index = point index).
 #[derive(Component, Clone, Debug, Default)]

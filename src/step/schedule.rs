@@ -30,9 +30,9 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleT
 use super::{cell_average, grid_update, locate, prepare, transfer};
 use crate::contact::{self, Contact};
 use crate::diagnostics;
-use crate::integration::{CpdiFixed, Integration, Linear, QuadraticBspline, Scheme};
 use crate::output::trajectory;
 use crate::scene::{Dilatation, StressUpdate, Transfer};
+use crate::shape_functions::{CpdiFixed, Integration, Linear, QuadraticBspline, Scheme};
 use crate::sim::Clock;
 
 /// The stages of a step, run in this order.

@@ -1,4 +1,4 @@
-//! Particle-to-grid scatter and grid-to-particle gather (SCIENCE.md 2, steps 1 and 5-6).
+//! Particle-to-grid scatter and grid-to-particle gather (docs/model.md §2, steps 2, 5 and 6).
 //!
 //! Each body scatters only to its own nodal field and gathers only from it; bodies meet
 //! through the Contact set. The gathers are parallel over points; the scatter is parallel
@@ -22,8 +22,8 @@ use super::grid_update::apply_walls;
 use super::locate::Location;
 use crate::body::{Body, Points};
 use crate::grid::{GridField, GridGeometry};
-use crate::integration::{Footprint, Scheme};
 use crate::scene::Wall;
+use crate::shape_functions::{Footprint, Scheme};
 use crate::sim::{Boundaries, Clock, Gravity, VelocityRule};
 
 /// `m_i = sum S m`, `(mv)_i = sum S m v`, `f_i = sum [S m g - V T . grad S]`, and, when the

@@ -80,7 +80,7 @@ pub fn least_acceleration(material: &TransPhase, angle: f64, gravity: f64) -> f6
     gravity * (angle.sin() - material.mu_2 * angle.cos())
 }
 
-/// The paper's PS-1 photoelastic discs (SCIENCE.md 6), as the chute scenes use them.
+/// The paper's PS-1 photoelastic discs (docs/model.md §7), as the chute scenes use them.
 pub fn ps1() -> TransPhase {
     let (shear, bulk) = regolith::material::elastic::moduli(2.0e7, 0.45);
     TransPhase {

@@ -1,14 +1,14 @@
 //! An example plugin: an axis-aligned ellipse as a body shape.
 //!
 //! It uses only regolith's public API, exactly as a user's plugin would: implement
-//! [`regolith::registry::Item`] (its scene name and checks) and [`regolith::shape::Shape`] for
+//! [`regolith::registry::Item`] (its scene name and checks) and [`regolith::geometry::Shape`] for
 //! a parameter type and register it with `app.register::<dyn Shape, Ellipse>()`. A scene then
 //! writes
 //! `shape: Ellipse(centre: (0.5, 0.5), semi_axes: (0.2, 0.1))`.
 
+use regolith::geometry::{Shape, finite, positive};
 use regolith::glam::DVec2;
 use regolith::registry::Item;
-use regolith::shape::{Shape, finite, positive};
 use regolith::{Plugin, Regolith};
 use serde::Deserialize;
 

@@ -1,6 +1,6 @@
 //! Shape-function schemes: how a material point's node weights and weight gradients are made.
 //!
-//! The schemes differ only here; the step is the same for all (SCIENCE.md 3). Every
+//! The schemes differ only here; the step is the same for all (docs/model.md §3). Every
 //! built-in scheme is a tensor product of a 1D rule; two are built on the bilinear hat
 //! `N(x) = max(0, 1 - |x|/h)`:
 //!

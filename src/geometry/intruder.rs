@@ -1,4 +1,4 @@
-//! The paper's tipped intruder (section 4.2; SCIENCE.md 6.1): a plate of width `w` with a
+//! The paper's tipped intruder (section 4.2; docs/model.md §7.1): a plate of width `w` with a
 //! flat top and a nose `y = s |x|` below, every corner rounded with radius `r`, its tail
 //! lengthened so that the rounded shape keeps the area the paper's mass implies.
 //!
