@@ -10,6 +10,7 @@
 
 use bevy_ecs::prelude::*;
 
+use crate::output::summary::Section;
 use crate::plugin::Install;
 use crate::registry::DynItem;
 use crate::scene::Scene;
@@ -24,9 +25,9 @@ pub trait Condition: DynItem {
     }
     /// Adds the condition's resources and systems.
     fn install(&self, sim: &mut Install);
-    /// The condition's section of `summary.json`, under its own key; by default none.
-    fn summary(&self, _world: &World) -> Option<(String, serde_json::Value)> {
-        None
+    /// The condition's entries in `summary.json`; by default none.
+    fn summary(&self, _world: &World) -> Section {
+        Section::default()
     }
     /// Re-aligns the condition with a run resumed at `time`; by default nothing.
     fn resume(&self, _world: &mut World, _time: f64) {}

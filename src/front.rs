@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, Points};
 use crate::linefit::line_fit;
+use crate::output::summary::Section;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -143,6 +144,24 @@ impl Item for PressureFront {
 }
 
 impl Output for PressureFront {
+    /// `pressure_front`: the front's speed and arrivals (`null` if fewer than two bins saw
+    /// it).
+    fn summary(&self, world: &World) -> Section {
+        let front = world
+            .get_resource::<PressureRecord>()
+            .and_then(|r| r.front());
+        let mut section = Section::entry("pressure_front", serde_json::json!(front));
+        section.units = vec![("pressure_front.speed".to_string(), "m/s".to_string())];
+        section.headline = Some(match &front {
+            Some(f) => format!(
+                "pressure front: {:.1} m/s over {} bins",
+                f.speed, f.bins_reached
+            ),
+            None => "pressure front: not measured (fewer than two bins saw it)".to_string(),
+        });
+        section
+    }
+
     fn install(&self, sim: &mut Install) {
         sim.insert_resource(PressureRecord {
             spec: self.clone(),

@@ -33,6 +33,8 @@ use serde::{Deserialize, Serialize};
 use crate::body::{Body, BodyState, Points};
 use crate::grid::GridField;
 use crate::output::Output;
+use crate::output::summary::Section;
+use crate::output::trajectory::Trajectory;
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::sim::Clock;
@@ -225,6 +227,30 @@ impl Item for Impact {
 }
 
 impl Output for Impact {
+    /// `impact`: the measures of [`analyse`], or `null` with `impact_not_measured` saying
+    /// why (the body never touched, too few rows after contact).
+    fn summary(&self, world: &World) -> Section {
+        let (impact, why) = match measure(world) {
+            Some(Ok(m)) => (Some(m), None),
+            Some(Err(why)) => (None, Some(why)),
+            None => (None, None),
+        };
+        let mut section = Section::entry("impact", serde_json::json!(impact));
+        section
+            .entries
+            .insert("impact_not_measured".into(), serde_json::json!(why));
+        section.units = UNITS
+            .iter()
+            .map(|&(k, u)| (format!("impact.{k}"), u.to_string()))
+            .collect();
+        section.headline = Some(match (&impact, &why) {
+            (Some(m), _) => headline(m),
+            (None, Some(why)) => format!("impact: not measured: {why}"),
+            (None, None) => "impact: not measured".to_string(),
+        });
+        section
+    }
+
     fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
         match scene.bodies.iter().find(|b| b.name == self.body) {
             None => Err(format!(
@@ -262,6 +288,66 @@ impl Output for Impact {
         sim.add_systems(crate::step::StepSet::Output, record_first_contact);
     }
 }
+/// The impact measures from the trajectory rows and the recorded first contact: `None`
+/// without an `Impact` output's watch, `Some(Err(why))` when they could not be measured.
+fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
+    let watch = world.get_resource::<ImpactWatch>()?;
+    let table = world.get_resource::<Trajectory>()?;
+    let now = world.get_resource::<Clock>().map_or(0.0, |c| c.time);
+    let mass = world.try_query::<(&Body, &BodyState)>().and_then(|mut q| {
+        q.iter(world)
+            .find(|(b, _)| b.name == watch.body)
+            .map(|(_, s)| s.mass)
+    });
+    let series = |q: &str| {
+        table
+            .column(&watch.body, q)
+            .map(|c| table.series(c))
+            .ok_or_else(|| format!("the trajectory has no column {}_{q}", watch.body))
+    };
+    let measured = || {
+        let (y, vx, vy) = (series("y")?, series("vx")?, series("vy")?);
+        let contact = watch.contact.ok_or_else(|| {
+            format!(
+                "body \"{}\" felt no contact force before the run ended at t = {now} s",
+                watch.body
+            )
+        })?;
+        let mass = mass.ok_or_else(|| format!("no body \"{}\"", watch.body))?;
+        analyse(
+            (&table.series(0), &y, &vx, &vy),
+            &contact,
+            watch.surface,
+            mass,
+        )
+        .ok_or_else(|| {
+            format!(
+                "fewer than two trajectory rows after first contact at t = {} s",
+                contact.time
+            )
+        })
+    };
+    Some(measured())
+}
+
+/// The impact result in one line.
+fn headline(m: &ImpactMetrics) -> String {
+    let contact = format!(
+        "first contact at {:.4} s, {:.3} m/s, {:.2} J/m",
+        m.contact_time, m.contact_speed, m.impact_energy
+    );
+    match (m.final_depth, m.stopping_time) {
+        (Some(depth), Some(stop)) => format!(
+            "impact: at rest; final depth {depth:.4} m, stopping time {stop:.4} s ({contact})"
+        ),
+        _ => format!(
+            "impact: NOT at rest, no final depth or stopping time: {} (depth so far {:.4} m; {contact})",
+            m.not_at_rest.as_deref().unwrap_or_default(),
+            m.depth_at_end
+        ),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

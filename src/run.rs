@@ -16,7 +16,6 @@ use std::time::Instant;
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
-use crate::impact::{ImpactMetrics, ImpactWatch, analyse};
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
 use crate::scene::{Scene, TimeStep};
@@ -221,26 +220,20 @@ pub fn summarize(
         TimeStep::Fixed(dt) => ("fixed", dt),
         TimeStep::Cfl(_) => ("cfl", clock.dt_max),
     };
-    let (impact, impact_not_measured) = match impact_metrics(sim, &bodies) {
-        None => (None, None),
-        Some(Ok(m)) => (Some(m), None),
-        Some(Err(why)) => (None, Some(why)),
-    };
-    let pressure_front = sim
-        .world
-        .get_resource::<crate::front::PressureRecord>()
-        .and_then(|r| r.front());
-    let sections = scene
-        .conditions
-        .iter()
-        .filter_map(|c| c.summary(&sim.world))
-        .collect();
+    let mut units = crate::output::summary::units();
+    let mut sections = serde_json::Map::new();
+    let mut headlines = Vec::new();
+    let items = scene.outputs.iter().map(|o| o.summary(&sim.world));
+    let items = items.chain(scene.conditions.iter().map(|c| c.summary(&sim.world)));
+    for section in items {
+        sections.extend(section.entries);
+        units.extend(section.units);
+        headlines.extend(section.headline);
+    }
     Summary {
         sections,
-        impact,
-        impact_not_measured,
-        units: crate::output::summary::units(),
-        pressure_front,
+        headlines,
+        units,
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),
         overrides: from.overrides.to_vec(),
@@ -270,51 +263,6 @@ pub fn summarize(
         timings_s,
         bodies,
     }
-}
-
-/// The impact measures of an `Impact` output, from the trajectory rows and the recorded
-/// first contact: `None` without an `Impact` output, `Some(Err(why))` when they could not
-/// be measured.
-fn impact_metrics(
-    sim: &Simulation,
-    bodies: &[BodySummary],
-) -> Option<Result<ImpactMetrics, String>> {
-    let watch = sim.world.get_resource::<ImpactWatch>()?;
-    let measure = || {
-        let table = sim.trajectory();
-        let series = |q: &str| {
-            table
-                .column(&watch.body, q)
-                .map(|c| table.series(c))
-                .ok_or_else(|| format!("the trajectory has no column {}_{q}", watch.body))
-        };
-        let (y, vx, vy) = (series("y")?, series("vx")?, series("vy")?);
-        let contact = watch.contact.ok_or_else(|| {
-            format!(
-                "body \"{}\" felt no contact force before the run ended at t = {} s",
-                watch.body,
-                sim.clock().time
-            )
-        })?;
-        let mass = bodies
-            .iter()
-            .find(|b| b.name == watch.body)
-            .map(|b| b.mass)
-            .ok_or_else(|| format!("no body \"{}\"", watch.body))?;
-        analyse(
-            (&table.series(0), &y, &vx, &vy),
-            &contact,
-            watch.surface,
-            mass,
-        )
-        .ok_or_else(|| {
-            format!(
-                "fewer than two trajectory rows after first contact at t = {} s",
-                contact.time
-            )
-        })
-    };
-    Some(measure())
 }
 
 /// Rough memory use of a scene's state in bytes: points, material history and one nodal

@@ -286,18 +286,10 @@ impl Simulation {
                 .fault
                 .get_or_insert(fault);
         }
-        if let Some(f) = &self.world.resource::<Health>().fault {
-            return Err(f.clone());
+        match &self.world.resource::<Health>().fault {
+            Some(f) => Err(f.clone()),
+            None => Ok(()),
         }
-        if let Some(e) = &self.world.resource::<Trajectory>().write_error {
-            let c = self.clock();
-            return Err(Fault {
-                step: c.step,
-                time: c.time,
-                message: format!("cannot write trajectory.csv: {e}"),
-            });
-        }
-        Ok(())
     }
 
     /// Whether the end time has been reached.

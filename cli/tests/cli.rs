@@ -346,7 +346,8 @@ fn recording_options_without_a_recording_are_an_error() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("ColourOfMoney") && err.lines().count() == 1,
+        err.contains("--color colour-of-money: expected one of pressure, plastic-strain-rate")
+            && err.lines().count() == 1,
         "{err}"
     );
 }

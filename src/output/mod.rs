@@ -40,6 +40,10 @@ pub trait Output: DynItem {
     /// Re-aligns the output's own schedule with a run resumed at `time` (the state it
     /// would have had then); by default nothing.
     fn resume(&self, _world: &mut World, _time: f64) {}
+    /// The output's entries in `summary.json`; by default none.
+    fn summary(&self, _world: &World) -> summary::Section {
+        summary::Section::default()
+    }
 }
 
 crate::item_kind!(Output, "output");

@@ -3,8 +3,29 @@
 use std::collections::BTreeMap;
 
 use serde::Serialize;
+use serde_json::{Map, Value};
 
-use crate::impact::ImpactMetrics;
+/// What a scene item (an output, a condition) adds to `summary.json`: entries under keys of
+/// its own, the units of their dimensional fields (`"impact.final_depth": "m"`), and a line
+/// the command prints after the run.
+#[derive(Clone, Debug, Default)]
+pub struct Section {
+    pub entries: Map<String, Value>,
+    pub units: Vec<(String, String)>,
+    pub headline: Option<String>,
+}
+
+impl Section {
+    /// A section of one entry.
+    pub fn entry(key: &str, value: Value) -> Section {
+        let mut entries = Map::new();
+        entries.insert(key.to_string(), value);
+        Section {
+            entries,
+            ..Section::default()
+        }
+    }
+}
 
 /// The whole summary. Field names are a public interface: extend, do not rename.
 #[derive(Clone, Debug, Serialize)]
@@ -44,18 +65,16 @@ pub struct Summary {
     /// Wall time per step set (s).
     pub timings_s: BTreeMap<String, f64>,
     pub bodies: Vec<BodySummary>,
-    /// The paper's impact measures, when the scene has an `Impact` output and the body hit
-    /// its surface.
-    pub impact: Option<ImpactMetrics>,
-    /// Why `impact` is null although the scene asked for it.
-    pub impact_not_measured: Option<String>,
     /// The unit of every dimensional field, by name (`impact.final_depth` for nested ones).
     pub units: BTreeMap<String, String>,
-    /// The pressure front's speed, when the scene asks for `PressureFront(..)`.
-    pub pressure_front: Option<crate::front::FrontMetrics>,
-    /// The sections the scene's conditions add, each under its own key.
+    /// The entries the scene's outputs and conditions add, each under its own key (the
+    /// `Impact` output's `impact` and `impact_not_measured`, `PressureFront`'s
+    /// `pressure_front`, ...).
     #[serde(flatten)]
-    pub sections: BTreeMap<String, serde_json::Value>,
+    pub sections: Map<String, Value>,
+    /// The lines the command prints after the run, one per item that has one.
+    #[serde(skip)]
+    pub headlines: Vec<String>,
 }
 
 /// One body's final state.
@@ -77,7 +96,7 @@ pub struct BodySummary {
     pub state_hash: String,
 }
 
-/// The `units` map of `summary.json`.
+/// The `units` map of `summary.json` for its own fields (items add theirs).
 pub fn units() -> BTreeMap<String, String> {
     let top = [
         ("time", "s"),
@@ -96,10 +115,5 @@ pub fn units() -> BTreeMap<String, String> {
     ];
     top.iter()
         .map(|&(k, u)| (k.to_string(), u.to_string()))
-        .chain(
-            crate::impact::UNITS
-                .iter()
-                .map(|&(k, u)| (format!("impact.{k}"), u.to_string())),
-        )
         .collect()
 }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use bevy_ecs::prelude::*;
 
+use super::OutputFaults;
 use crate::body::{Body, BodyState};
 use crate::sim::Clock;
 
@@ -18,8 +19,6 @@ pub struct Trajectory {
     pub columns: Vec<String>,
     pub rows: Vec<Vec<f64>>,
     sink: Option<(PathBuf, BufWriter<File>)>,
-    /// The first write error, reported by the runner.
-    pub write_error: Option<String>,
 }
 
 impl Trajectory {
@@ -81,6 +80,7 @@ fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
 /// Appends a row for the current time.
 pub fn record_trajectory(
     clock: Res<Clock>,
+    faults: Res<OutputFaults>,
     mut table: ResMut<Trajectory>,
     bodies: Query<(&Body, &BodyState)>,
 ) {
@@ -96,11 +96,10 @@ pub fn record_trajectory(
         ]);
     }
     let table = &mut *table;
-    if let Some((_, w)) = table.sink.as_mut() {
-        let result = write_row(w, &row).and_then(|_| w.flush());
-        if let (Err(e), None) = (result, &table.write_error) {
-            table.write_error = Some(e.to_string());
-        }
+    if let Some((_, w)) = table.sink.as_mut()
+        && let Err(e) = write_row(w, &row).and_then(|_| w.flush())
+    {
+        faults.report(&clock, format!("cannot write trajectory.csv: {e}"));
     }
     table.rows.push(row);
 }

@@ -362,26 +362,16 @@ impl Scene {
         apply(&all)
     }
 
-    /// Adds an output written as scene text, e.g. `Rerun(file: "run.rrd")`, replacing any
-    /// output of the same name the scene already lists (the command line's recording flags
-    /// use this); returns whether it replaced one. `origin` names where the text came from
-    /// in error messages.
-    pub fn add_output(
-        &mut self,
-        text: &str,
-        origin: &str,
-        registries: &Arc<Registries>,
-    ) -> Result<bool, SceneError> {
-        let output: Named<dyn Output> =
-            with_registries(registries, || ron_options().from_str(text))
-                .map_err(|e| SceneError::file(origin, format!("{} in `{text}`", e.code)))?;
+    /// Adds `output` after checking it, replacing the scene's own output of the same name
+    /// (the command line's `--rrd` or `--vtk`); returns whether one was replaced.
+    pub fn set_output(&mut self, output: Box<dyn Output>) -> Result<bool, String> {
         output
             .validate()
-            .map_err(|e| SceneError::file(origin, format!("{}: {e}", output.name())))?;
+            .map_err(|e| format!("{}: {e}", output.name()))?;
         let before = self.outputs.len();
         self.outputs.retain(|o| o.name() != output.name());
         let replaced = self.outputs.len() < before;
-        self.outputs.push(output);
+        self.outputs.push(Named(output));
         Ok(replaced)
     }
 }

@@ -21,7 +21,7 @@
 
 use regolith::body::Phase;
 use regolith::material::MaterialSpec;
-use regolith::material::elastic::{moduli, p_wave_modulus};
+use regolith::material::elastic::{LinearElastic, moduli};
 use regolith::material::{Material, PointOutcome, PointStep};
 use regolith::plugin::{Plugin, Regolith};
 use regolith::registry::Item;
@@ -73,6 +73,15 @@ impl Item for Bingham {
 }
 
 impl Bingham {
+    /// The elastic part alone: the material below its yield stress, the trial of its update.
+    pub fn elastic(&self) -> LinearElastic {
+        LinearElastic {
+            density: self.density,
+            youngs_modulus: self.youngs_modulus,
+            poisson_ratio: self.poisson_ratio,
+        }
+    }
+
     /// The plastic shear rate `g` and the returned equivalent shear stress for a trial
     /// equivalent shear stress `trial`, over a step `dt` with shear modulus `shear`.
     pub fn flow(&self, trial: f64, shear: f64, dt: f64) -> Option<(f64, f64)> {
@@ -91,36 +100,33 @@ impl Material for Bingham {
     }
 
     fn wave_speed(&self) -> f64 {
-        (p_wave_modulus(self.youngs_modulus, self.poisson_ratio) / self.density).sqrt()
+        Material::wave_speed(&self.elastic())
     }
 
     fn lithostatic_ratio(&self) -> f64 {
-        self.poisson_ratio / (1.0 - self.poisson_ratio)
+        Material::lithostatic_ratio(&self.elastic())
     }
 
     fn update(&self, stress: &mut Stress, _history: &mut (), step: &PointStep) -> PointOutcome {
-        let (shear, bulk) = moduli(self.youngs_modulus, self.poisson_ratio);
-        let trial = stress.jaumann_elastic_trial(step.velocity_gradient, step.dt, shear, bulk);
+        let mut trial = *stress;
+        Material::update(&self.elastic(), &mut trial, &mut (), step);
         let tau_trial = trial.equivalent_shear();
-        match self.flow(tau_trial, shear, step.dt) {
-            None => {
-                *stress = trial;
-                PointOutcome::default()
-            }
-            Some((rate, tau)) => {
-                let p = trial.pressure();
-                let dev = trial.deviator().scaled(tau / tau_trial);
-                *stress = Stress {
-                    xx: dev.xx - p,
-                    yy: dev.yy - p,
-                    xy: dev.xy,
-                    zz: dev.zz - p,
-                };
-                PointOutcome {
-                    plastic_strain_rate: rate,
-                    phase: Phase::Flowing,
-                }
-            }
+        let (shear, _) = moduli(self.youngs_modulus, self.poisson_ratio);
+        let Some((rate, tau)) = self.flow(tau_trial, shear, step.dt) else {
+            *stress = trial;
+            return PointOutcome::default();
+        };
+        let p = trial.pressure();
+        let dev = trial.deviator().scaled(tau / tau_trial);
+        *stress = Stress {
+            xx: dev.xx - p,
+            yy: dev.yy - p,
+            xy: dev.xy,
+            zz: dev.zz - p,
+        };
+        PointOutcome {
+            plastic_strain_rate: rate,
+            phase: Phase::Flowing,
         }
     }
 }

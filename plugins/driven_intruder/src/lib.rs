@@ -19,6 +19,7 @@ use regolith::body::{Body, Points};
 use regolith::condition::Condition;
 use regolith::glam::DVec2;
 use regolith::grid::GridField;
+use regolith::output::summary::Section;
 use regolith::output::{OutputFaults, RunDir, write_atomic};
 use regolith::plugin::{Install, Plugin, Regolith};
 use regolith::registry::Item;
@@ -74,19 +75,38 @@ impl Condition for Driven {
         sim.add_systems(StepSet::Output, record.run_if(output_due));
     }
 
-    fn summary(&self, world: &World) -> Option<(String, serde_json::Value)> {
-        let drive = world.get_resource::<Drive>()?;
+    /// `driven`: the body, its velocity, the rows recorded and the last forces.
+    fn summary(&self, world: &World) -> Section {
+        let Some(drive) = world.get_resource::<Drive>() else {
+            return Section::default();
+        };
         let last = drive.rows.last();
-        let section = serde_json::json!({
-            "body": self.body,
-            "velocity": self.velocity.to_array(),
-            "rows": drive.rows.len(),
-            "final_bottom": last.map(|r| r.bottom),
-            "final_drive_force": last.map(|r| r.force.to_array()),
-            "final_contact_force": last.map(|r| r.contact.to_array()),
-            "max_resistance": drive.rows.iter().map(|r| r.contact.y).fold(f64::NEG_INFINITY, f64::max),
+        let mut section = Section::entry(
+            "driven",
+            serde_json::json!({
+                "body": self.body,
+                "velocity": self.velocity.to_array(),
+                "rows": drive.rows.len(),
+                "final_bottom": last.map(|r| r.bottom),
+                "final_drive_force": last.map(|r| r.force.to_array()),
+                "final_contact_force": last.map(|r| r.contact.to_array()),
+            }),
+        );
+        section.units = [
+            ("driven.velocity", "m/s"),
+            ("driven.final_bottom", "m"),
+            ("driven.final_drive_force", "N/m (per metre of thickness)"),
+            ("driven.final_contact_force", "N/m (per metre of thickness)"),
+        ]
+        .map(|(k, u)| (k.to_string(), u.to_string()))
+        .to_vec();
+        section.headline = last.map(|r| {
+            format!(
+                "driven: {} at {} m/s, tip at {:.4} m, resistance {:.1} N/m (driven.csv)",
+                self.body, self.velocity, r.bottom, r.contact.y
+            )
         });
-        Some(("driven".to_string(), section))
+        section
     }
 
     fn resume(&self, world: &mut World, time: f64) {

@@ -29,6 +29,22 @@ pub enum Field {
 }
 
 impl Field {
+    pub const ALL: [Field; 6] = [
+        Field::Pressure,
+        Field::PlasticStrainRate,
+        Field::InertialNumber,
+        Field::Phase,
+        Field::Speed,
+        Field::Body,
+    ];
+
+    /// The field called `name` on the command line: its component name, with `-` or `_`
+    /// between words (`plastic-strain-rate`).
+    pub fn parse(name: &str) -> Option<Field> {
+        let name = name.replace('-', "_");
+        Field::ALL.into_iter().find(|f| f.name() == name)
+    }
+
     /// The component name the values are recorded under.
     pub fn name(self) -> &'static str {
         match self {
