@@ -13,13 +13,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::diagnostics::EnergyLimit;
-use crate::impact::{ContactInstant, ImpactWatch};
+use crate::output::impact::{ContactInstant, ImpactWatch};
 use crate::output::write_atomic;
+use crate::resources::{Clock, OutputClock, StepRule};
 use crate::scene::Scene;
-use crate::sim::{Clock, Simulation};
+use crate::sim::Simulation;
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 3;
+const FORMAT: u32 = 4;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -28,6 +29,8 @@ pub struct Checkpoint {
     pub scene_file: String,
     pub overrides: Vec<String>,
     clock: Clock,
+    step_rule: StepRule,
+    output_clock: OutputClock,
     energy_bound: Option<f64>,
     trajectory: Vec<Vec<f64>>,
     /// The `Impact` output's first contact, and its last state before contact.
@@ -75,6 +78,8 @@ impl Checkpoint {
             scene_file: scene_file.to_string(),
             overrides: overrides.to_vec(),
             clock: sim.clock().clone(),
+            step_rule: sim.world.resource::<StepRule>().clone(),
+            output_clock: sim.world.resource::<OutputClock>().clone(),
             energy_bound: sim.world.resource::<EnergyLimit>().bound,
             trajectory: sim.trajectory().rows.clone(),
             impact: sim
@@ -140,6 +145,8 @@ impl Checkpoint {
         }
         let time = self.clock.time;
         *sim.world.resource_mut::<Clock>() = self.clock;
+        *sim.world.resource_mut::<StepRule>() = self.step_rule;
+        *sim.world.resource_mut::<OutputClock>() = self.output_clock;
         sim.world.resource_mut::<EnergyLimit>().bound = self.energy_bound;
         sim.trajectory_mut().rows = self.trajectory;
         for output in &scene.outputs {

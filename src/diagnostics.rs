@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::body::{Body, BodyState, ChunkSurvey, Points};
 use crate::error::Fault;
 use crate::grid::GridGeometry;
-use crate::sim::{Clock, Gravity};
+use crate::resources::{Clock, Gravity};
 
 /// The first fault seen, if any.
 #[derive(Resource, Debug, Default)]

@@ -15,23 +15,21 @@ pub mod contact;
 pub mod diagnostics;
 pub mod error;
 pub mod fill;
-pub mod flow_field;
-pub mod free_surface;
-pub mod front;
 pub mod geometry;
 pub mod grid;
-pub mod impact;
 pub mod linefit;
 pub mod material;
 pub mod output;
 pub mod plugin;
 pub mod registry;
+pub mod resources;
 pub mod run;
 pub mod scene;
 pub mod shape_functions;
 pub mod sim;
 pub mod step;
 pub mod stress;
+pub mod velocity;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.
 pub use bevy_ecs;

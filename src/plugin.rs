@@ -14,30 +14,33 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleConfigs;
 use bevy_ecs::system::ScheduleSystem;
 
+use crate::contact::{Contact, Frictional, NoSlip};
 use crate::error::SceneError;
-use crate::flow_field::FlowField;
-use crate::free_surface::FreeSurface;
-use crate::front::PressureFront;
 use crate::geometry::Shape;
 use crate::geometry::builtin::{Disc, Polygon, Rectangle};
 use crate::geometry::intruder::TippedIntruder;
-use crate::impact::Impact;
 use crate::material::MaterialSpec;
 use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
 use crate::output::Output;
+use crate::output::flow_field::FlowField;
+use crate::output::free_surface::FreeSurface;
+use crate::output::front::PressureFront;
+use crate::output::impact::Impact;
 use crate::output::snapshots::Snapshots;
 use crate::output::vtk::Vtk;
 use crate::registry::{IntoKind, Item, Kind, Registries};
 use crate::scene::Scene;
+use crate::shape_functions::{CpdiFixed, Linear, QuadraticBspline, ShapeFunctions};
 use crate::step::{Core, StepSet};
+use crate::velocity::{AffineFlip, Apic, Flip, Transfer};
 
 /// Something that adds scene items, systems or resources to regolith.
 pub trait Plugin {
     fn build(&self, app: &mut Regolith);
 }
 
-/// The built-in materials, shapes and outputs.
+/// The built-in materials, shapes, outputs, shape functions, contact laws and transfers.
 pub struct DefaultPlugins;
 
 impl Plugin for DefaultPlugins {
@@ -54,7 +57,15 @@ impl Plugin for DefaultPlugins {
             .register::<dyn Output, Impact>()
             .register::<dyn Output, PressureFront>()
             .register::<dyn Output, FlowField>()
-            .register::<dyn Output, FreeSurface>();
+            .register::<dyn Output, FreeSurface>()
+            .register::<dyn ShapeFunctions, Linear>()
+            .register::<dyn ShapeFunctions, CpdiFixed>()
+            .register::<dyn ShapeFunctions, QuadraticBspline>()
+            .register::<dyn Contact, NoSlip>()
+            .register::<dyn Contact, Frictional>()
+            .register::<dyn Transfer, Flip>()
+            .register::<dyn Transfer, Apic>()
+            .register::<dyn Transfer, AffineFlip>();
     }
 }
 

@@ -33,6 +33,9 @@ pub trait Item: Clone + fmt::Debug + Send + Sync + DeserializeOwned + 'static {
     fn validate(&self) -> Result<(), String> {
         Ok(())
     }
+    /// The item has no parameters and is written by its name alone (`NoSlip`, `Linear`),
+    /// as a unit struct deserialises.
+    const UNIT: bool = false;
 }
 
 /// [`Item`] as a trait object sees it; implemented for every item, so a kind's trait only
@@ -97,9 +100,23 @@ fn construct<K: ?Sized, P: Item + IntoKind<K>>(
     Ok(params.into_kind())
 }
 
+/// A registered item: its constructor, and whether it is written by its name alone.
+struct Entry<K: ?Sized> {
+    construct: Constructor<K>,
+    unit: bool,
+}
+
+impl<K: ?Sized> Clone for Entry<K> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<K: ?Sized> Copy for Entry<K> {}
+
 /// The registered items of one kind, by name.
 struct Catalog<K: ?Sized> {
-    entries: BTreeMap<&'static str, Constructor<K>>,
+    entries: BTreeMap<&'static str, Entry<K>>,
 }
 
 /// Adds a plugin's systems to a schedule (one closure per `add_systems` call).
@@ -151,7 +168,13 @@ impl Registries {
             .downcast_mut::<Catalog<K>>()
             .expect("catalogues are filed by their kind's type")
             .entries
-            .insert(P::NAME, construct::<K, P>);
+            .insert(
+                P::NAME,
+                Entry {
+                    construct: construct::<K, P>,
+                    unit: P::UNIT,
+                },
+            );
     }
 
     fn catalog<K: ?Sized + Kind>(&self) -> Option<&Catalog<K>> {
@@ -167,7 +190,7 @@ impl Registries {
             .unwrap_or_default()
     }
 
-    fn constructor<K: ?Sized + Kind>(&self, name: &str) -> Option<Constructor<K>> {
+    fn entry<K: ?Sized + Kind>(&self, name: &str) -> Option<Entry<K>> {
         self.catalog::<K>()
             .and_then(|c| c.entries.get(name).copied())
     }
@@ -244,12 +267,12 @@ impl<'de, K: ?Sized + Kind> de::Visitor<'de> for NamedVisitor<K> {
 
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Self::Value, A::Error> {
         let (VariantName(name), variant) = data.variant()?;
-        let ctor = ACTIVE.with(|a| {
+        let entry = ACTIVE.with(|a| {
             let reg = a.borrow();
             let reg = reg.as_ref().ok_or_else(|| {
                 de::Error::custom("no plugin registry is active (internal error)")
             })?;
-            reg.constructor::<K>(&name).ok_or_else(|| {
+            reg.entry::<K>(&name).ok_or_else(|| {
                 de::Error::custom(format!(
                     "unknown {} `{}`, expected one of: {}",
                     K::KIND,
@@ -258,7 +281,19 @@ impl<'de, K: ?Sized + Kind> de::Visitor<'de> for NamedVisitor<K> {
                 ))
             })
         })?;
-        variant.struct_variant(&[], ParamsVisitor { ctor, name })
+        let visitor = ParamsVisitor {
+            ctor: entry.construct,
+            name,
+        };
+        if entry.unit {
+            variant.unit_variant()?;
+            let unit = de::value::UnitDeserializer::<de::value::Error>::new();
+            visitor
+                .build(&mut <dyn erased_serde::Deserializer>::erase(unit))
+                .map_err(de::Error::custom)
+        } else {
+            variant.struct_variant(&[], visitor)
+        }
     }
 }
 
@@ -286,6 +321,17 @@ struct ParamsVisitor<K: ?Sized> {
     name: String,
 }
 
+impl<K: ?Sized + Kind> ParamsVisitor<K> {
+    /// The item from its parameters, checked: the physical checks run here so that RON can
+    /// still say where the item ends.
+    fn build(self, params: &mut dyn erased_serde::Deserializer<'_>) -> Result<Named<K>, String> {
+        let item = (self.ctor)(params).map_err(|e| format!("in `{}`: {e}", self.name))?;
+        item.validate()
+            .map_err(|e| format!("in `{}`: {e}", self.name))?;
+        Ok(Named(item))
+    }
+}
+
 impl<'de, K: ?Sized + Kind> de::Visitor<'de> for ParamsVisitor<K> {
     type Value = Named<K>;
 
@@ -299,12 +345,7 @@ impl<'de, K: ?Sized + Kind> de::Visitor<'de> for ParamsVisitor<K> {
 
     fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
         let d = de::value::MapAccessDeserializer::new(map);
-        let mut erased = <dyn erased_serde::Deserializer>::erase(d);
-        let item = (self.ctor)(&mut erased)
-            .map_err(|e| de::Error::custom(format!("in `{}`: {e}", self.name)))?;
-        // Physical checks run here so that RON can still say where the item ends.
-        item.validate()
-            .map_err(|e| de::Error::custom(format!("in `{}`: {e}", self.name)))?;
-        Ok(Named(item))
+        self.build(&mut <dyn erased_serde::Deserializer>::erase(d))
+            .map_err(de::Error::custom)
     }
 }

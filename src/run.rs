@@ -18,8 +18,9 @@ use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
+use crate::resources::{Clock, StepRule};
 use crate::scene::{Scene, TimeStep};
-use crate::sim::{Clock, Simulation, on_worker};
+use crate::sim::{Simulation, on_worker};
 use crate::step::StepSet;
 
 /// Where the scene came from, for the record.
@@ -216,9 +217,10 @@ pub fn summarize(
         .zip(sim.timings().per_set)
         .map(|(set, d)| (set.label().to_string(), d.as_secs_f64()))
         .collect();
-    let (dt_rule, dt) = match clock.rule {
+    let rule = sim.world.resource::<StepRule>().clone();
+    let (dt_rule, dt) = match rule.rule {
         TimeStep::Fixed(dt) => ("fixed", dt),
-        TimeStep::Cfl(_) => ("cfl", clock.dt_max),
+        TimeStep::Cfl(_) => ("cfl", rule.dt_max),
     };
     let mut units = crate::output::summary::units();
     let mut sections = serde_json::Map::new();
@@ -243,10 +245,10 @@ pub fn summarize(
         steps: clock.step,
         time: clock.time,
         dt,
-        dt_min: if clock.step > 0 { clock.dt_min } else { 0.0 },
-        dt_max: clock.dt_max,
+        dt_min: if clock.step > 0 { rule.dt_min } else { 0.0 },
+        dt_max: rule.dt_max,
         dt_rule: dt_rule.to_string(),
-        cfl: clock.cfl_max,
+        cfl: rule.cfl_max,
         particles,
         cells: grid.cells,
         cell_size: grid.cell_size,

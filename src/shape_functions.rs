@@ -24,10 +24,13 @@
 //! A point that is itself outside the domain is a fault caught by the diagnostics; here its
 //! coordinate is clamped so that indexing never leaves the grid.
 
+use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 use serde::Deserialize;
 
 use crate::grid::GridGeometry;
+use crate::registry::{DynItem, Item};
+use crate::step::StepOptions;
 
 /// Weights of up to three consecutive nodes along one axis, starting at node `base`.
 /// `dw` is the derivative with respect to the coordinate in cell units.
@@ -40,9 +43,7 @@ pub struct AxisWeights {
 
 /// A way of producing node weights: a type, so the step is monomorphised per scheme
 /// (no dynamic dispatch per point).
-pub trait Scheme: Send + Sync + 'static {
-    /// The scheme's name in a scene file.
-    const NAME: &'static str;
+pub trait Scheme: Item {
     /// Whether the APIC affine matrix `B D^-1` is exactly the velocity gradient for these
     /// weights (true of bilinear weights, Jiang et al. 2015), so the gradient is taken: the
     /// same matrix, without `D`'s ill-conditioning next to a node line.
@@ -52,24 +53,46 @@ pub trait Scheme: Send + Sync + 'static {
     fn axis(xi: f64, alpha: f64, cells: usize, periodic: bool) -> AxisWeights;
 }
 
-/// The scheme a scene selects.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum Integration {
-    /// Standard MPM: point-evaluated bilinear shape functions.
-    Linear,
-    /// The paper's fixed-extent CPDI (uGIMP-like) integration.
-    #[default]
-    CpdiFixed,
-    /// Quadratic B-spline weights (C1 across cells, three nodes per axis).
-    QuadraticBspline,
+/// The shape functions a scene selects (`integration: CpdiFixed`): a kind of scene item,
+/// so a plugin may add a scheme. Every [`Scheme`] is one; it adds the scatter and gather
+/// systems compiled for its weights.
+pub trait ShapeFunctions: DynItem {
+    /// Adds the scatter and the gather built on these shape functions to the step.
+    fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions);
 }
 
-/// Standard MPM weights.
+crate::item_kind!(ShapeFunctions, "shape-function scheme");
+
+impl<S: Scheme> ShapeFunctions for S {
+    fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions) {
+        crate::step::add_transfers::<S>(schedule, options);
+    }
+}
+
+/// Standard MPM: point-evaluated bilinear weights.
+#[derive(Clone, Copy, Debug, Deserialize)]
 pub struct Linear;
-/// Fixed-extent CPDI weights.
+/// The paper's fixed-extent CPDI (uGIMP-like) weights; the default.
+#[derive(Clone, Copy, Debug, Deserialize)]
 pub struct CpdiFixed;
-/// Quadratic B-spline weights.
+/// Quadratic B-spline weights (C1 across cells, three nodes per axis).
+#[derive(Clone, Copy, Debug, Deserialize)]
 pub struct QuadraticBspline;
+
+impl Item for Linear {
+    const NAME: &'static str = "Linear";
+    const UNIT: bool = true;
+}
+
+impl Item for CpdiFixed {
+    const NAME: &'static str = "CpdiFixed";
+    const UNIT: bool = true;
+}
+
+impl Item for QuadraticBspline {
+    const NAME: &'static str = "QuadraticBspline";
+    const UNIT: bool = true;
+}
 
 #[inline]
 fn hat(x: f64) -> f64 {
@@ -86,7 +109,6 @@ pub fn fast_floor(x: f64) -> f64 {
 }
 
 impl Scheme for Linear {
-    const NAME: &'static str = "Linear";
     const AFFINE_IS_GRADIENT: bool = true;
     #[inline]
     fn axis(xi: f64, _alpha: f64, cells: usize, periodic: bool) -> AxisWeights {
@@ -106,7 +128,6 @@ impl Scheme for Linear {
 }
 
 impl Scheme for CpdiFixed {
-    const NAME: &'static str = "CpdiFixed";
     #[inline]
     fn axis(xi: f64, alpha: f64, cells: usize, periodic: bool) -> AxisWeights {
         let n = cells as f64;
@@ -138,7 +159,6 @@ impl Scheme for CpdiFixed {
 }
 
 impl Scheme for QuadraticBspline {
-    const NAME: &'static str = "QuadraticBspline";
     #[inline]
     fn axis(xi: f64, _alpha: f64, cells: usize, periodic: bool) -> AxisWeights {
         let n = cells as f64;

@@ -4,66 +4,22 @@ use std::collections::BTreeSet;
 
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
-use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
-use crate::contact::ContactLaw;
 use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::output::trajectory::Trajectory;
-use crate::output::{OutputFaults, RunDir};
+use crate::output::{Interval, OutputFaults, RunDir};
 use crate::plugin::Install;
-use crate::scene::{BodySpec, Dilatation, InitialStress, Scene, TimeStep, Transfer, Walls};
+use crate::scene::{BodySpec, Dilatation, InitialStress, Scene};
 use crate::step::{self, Timings};
 use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
 
-/// Simulated time and the time-step bookkeeping.
-#[derive(Resource, Clone, Debug, Serialize, Deserialize)]
-pub struct Clock {
-    pub time: f64,
-    pub dt: f64,
-    pub step: u64,
-    pub end: f64,
-    pub rule: TimeStep,
-    /// True only while the t = 0 state is being observed (no step is taken).
-    pub observing: bool,
-    /// This step lands on the end time.
-    pub last_step: bool,
-    pub output_every: f64,
-    pub next_output: f64,
-    pub output_due: bool,
-    pub dt_min: f64,
-    pub dt_max: f64,
-    /// Largest CFL number used so far.
-    pub cfl_max: f64,
-    /// A fixed step may exceed the CFL limit (the scene's `time.allow_unstable`).
-    pub allow_unstable: bool,
-}
-
-/// Body force per unit mass.
-#[derive(Resource, Clone, Copy, Debug)]
-pub struct Gravity(pub DVec2);
-
-/// The walls of the domain.
-#[derive(Resource, Clone, Copy, Debug)]
-pub struct Boundaries(pub Walls);
-
-/// How the points' velocities follow the grid: the scene's transfer and its FLIP fraction.
-#[derive(Resource, Clone, Copy, Debug)]
-pub struct VelocityRule {
-    pub transfer: Transfer,
-    pub flip: f64,
-}
-
-impl VelocityRule {
-    /// [`Transfer::pull`] for a step `dt` of a body of p-wave speed `c` on cells of size `h`.
-    pub fn pull(&self, dt: f64, h: f64, c: f64) -> f64 {
-        self.transfer.pull(self.flip, dt, h, c)
-    }
-}
+// The global state moved to `resources`; these names stay valid for plugins and tests.
+pub use crate::resources::{Boundaries, Clock, Gravity, OutputClock, StepRule, VelocityRule};
 
 /// A ready-to-step simulation.
 pub struct Simulation {
@@ -141,13 +97,15 @@ impl Simulation {
         let grid = scene.grid();
         let mut world = World::new();
         let multi_body = scene.bodies.len() > 1;
-        let mut schedule = step::build_schedule(step::StepOptions {
-            integration: scene.integration,
+        let mut schedule = step::build_schedule(&step::StepOptions {
+            integration: &*scene.integration,
             update: scene.update,
             dilatation: scene.dilatation,
-            transfer: scene.transfer,
-            contact: multi_body.then(|| scene.contact.clone()),
+            affine: scene.transfer.affine(),
         });
+        if multi_body {
+            scene.contact.install(&mut world, &mut schedule);
+        }
         let mut materials = BTreeSet::new();
         let mut tracked = Vec::new();
         for (index, spec) in scene.bodies.iter().enumerate() {
@@ -217,9 +175,6 @@ impl Simulation {
                 spec.material.add_systems(&mut schedule);
             }
         }
-        if multi_body {
-            world.insert_resource(ContactLaw(scene.contact.clone()));
-        }
         for output in &scene.outputs {
             output.install(&mut Install::new(&mut world, &mut schedule));
         }
@@ -228,21 +183,11 @@ impl Simulation {
         }
         scene.registries.install(&mut world, &mut schedule);
         world.insert_resource(grid);
-        world.insert_resource(Clock {
-            time: 0.0,
-            dt: 0.0,
-            step: 0,
-            end: scene.time.end,
-            rule: scene.time.step,
-            observing: true,
-            last_step: false,
-            output_every: scene.time.output_every,
-            next_output: 0.0,
-            output_due: false,
-            dt_min: f64::INFINITY,
-            dt_max: 0.0,
-            cfl_max: 0.0,
-            allow_unstable: scene.time.allow_unstable,
+        world.insert_resource(Clock::start(scene.time.end));
+        world.insert_resource(StepRule::new(scene.time.step, scene.time.allow_unstable));
+        world.insert_resource(OutputClock {
+            interval: Interval::new(scene.time.output_every),
+            due: false,
         });
         world.insert_resource(EnergyLimit {
             bound: scene.limits.max_kinetic_energy,
@@ -250,7 +195,7 @@ impl Simulation {
         world.insert_resource(Gravity(scene.gravity));
         world.insert_resource(Boundaries(scene.walls));
         world.insert_resource(VelocityRule {
-            transfer: scene.transfer,
+            transfer: scene.transfer.0.clone(),
             flip: scene.flip,
         });
         world.insert_resource(Health::default());
@@ -391,7 +336,8 @@ impl Simulation {
         let h = self.grid().cell_size;
         let mut q = self.world.query::<(&Body, &BodyState)>();
         let signal = step::signal_speed(q.iter(&self.world));
-        let dt = self.clock().rule.dt(h, signal, self.clock().end);
+        let rule = self.world.resource::<StepRule>().rule;
+        let dt = rule.dt(h, signal, self.clock().end);
         (dt, dt * signal / h)
     }
 }

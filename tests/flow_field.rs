@@ -6,7 +6,7 @@
 mod common;
 
 use regolith::Simulation;
-use regolith::flow_field::{FlowFields, NormalisedField};
+use regolith::output::flow_field::{FlowFields, NormalisedField};
 
 /// Mean normalised downward velocity of the bed points within a quarter diameter of the
 /// axis, in bands below the disc's centre (offsets in diameters; the disc's bottom is at

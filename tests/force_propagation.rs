@@ -4,7 +4,7 @@
 mod common;
 
 use regolith::Simulation;
-use regolith::front::PressureRecord;
+use regolith::output::front::PressureRecord;
 
 #[test]
 fn the_pressure_front_travels_at_the_p_wave_speed() {

@@ -141,7 +141,9 @@ fn a_dropped_intruder_falls_freely_until_first_contact() {
     let mut sim = Simulation::new(&scene);
     let y0 = sim.bodies()[1].1.centre_of_mass.y;
     sim.run(|_| {}).unwrap();
-    let watch = sim.world.resource::<regolith::impact::ImpactWatch>();
+    let watch = sim
+        .world
+        .resource::<regolith::output::impact::ImpactWatch>();
     let c = watch.contact.expect("the intruder hits the bed by 0.15 s");
     let v = glam::DVec2::from(c.velocity).length();
     let fallen = y0 - c.centre_of_mass[1];

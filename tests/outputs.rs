@@ -65,7 +65,7 @@ fn an_output_that_cannot_write_stops_the_run() {
 /// bulks the bed".)
 #[test]
 fn the_free_surface_starts_flat_opens_under_the_disc_and_follows_the_points() {
-    use regolith::free_surface::SurfaceRecord;
+    use regolith::output::free_surface::SurfaceRecord;
     let scene = common::scene(
         "flow_field_coarse",
         &[

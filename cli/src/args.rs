@@ -54,14 +54,8 @@ pub(crate) enum Command {
         /// The RON sweep file (not with --collect).
         #[arg(required_unless_present = "collect")]
         sweep: Option<PathBuf>,
-        /// Output directory (default: out/<sweep name>/).
-        #[arg(long, conflicts_with_all = ["plan", "collect"])]
-        out: Option<PathBuf>,
-        /// Runs at once (default: the sweep's `jobs`, else the number of cores).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
-        jobs: Option<u64>,
         #[command(flatten)]
-        plan: PlanArgs,
+        batch: BatchArgs,
     },
     /// Run an accuracy study: each knob moved alone from a baseline, errors against a named
     /// reference run (resumable), writing study.csv, study.md and pareto.png.
@@ -71,14 +65,8 @@ pub(crate) enum Command {
         /// The RON study file (not with --collect).
         #[arg(required_unless_present = "collect")]
         study: Option<PathBuf>,
-        /// Output directory (default: out/<study name>/).
-        #[arg(long, conflicts_with_all = ["plan", "collect"])]
-        out: Option<PathBuf>,
-        /// Runs at once (default: the study's `jobs`, else the number of cores).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
-        jobs: Option<u64>,
         #[command(flatten)]
-        plan: PlanArgs,
+        batch: BatchArgs,
     },
     /// Fit the Poncelet drag law m z'' = m g - f(z) - h(z) z'^2 across runs of one shape at
     /// three or more speeds (the paper's section 4.2), writing
@@ -146,6 +134,19 @@ pub(crate) enum Command {
 }
 
 /// Planning and collecting instead of running (`sweep` and `study`).
+/// How a sweep or a study runs here, or is planned or collected instead.
+#[derive(Args)]
+pub(crate) struct BatchArgs {
+    /// Output directory (default: out/<name in the file>/).
+    #[arg(long, conflicts_with_all = ["plan", "collect"])]
+    pub(crate) out: Option<PathBuf>,
+    /// Runs at once (default: the file's `jobs`, else the number of cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), conflicts_with_all = ["plan", "collect"])]
+    pub(crate) jobs: Option<u64>,
+    #[command(flatten)]
+    pub(crate) plan: PlanArgs,
+}
+
 #[derive(Args)]
 pub(crate) struct PlanArgs {
     /// Write the runs into DIR as a plan (runs/, jobs.txt, slurm.sbatch) instead of

@@ -11,7 +11,7 @@ use regolith::sim::{Clock, Simulation};
 use regolith_lab::plan::{BatchFile, Layout, SlurmOptions, write_plan};
 use regolith_lab::workers::run_local;
 
-use crate::args::{PlanArgs, SlurmArgs, parse_depths};
+use crate::args::{BatchArgs, SlurmArgs, parse_depths};
 use crate::flags::{RecordArgs, VtkArgs};
 use crate::progress::{draw, progress_bar, report};
 
@@ -84,10 +84,9 @@ pub(crate) fn run(
 pub(crate) fn batch_command<B: BatchFile>(
     registries: &Arc<Registries>,
     file: Option<PathBuf>,
-    out: Option<PathBuf>,
-    jobs: Option<u64>,
-    plan: PlanArgs,
+    batch_args: BatchArgs,
 ) -> Result<(), Error> {
+    let BatchArgs { out, jobs, plan } = batch_args;
     let path = match (file, plan.collect) {
         (None, Some(dir)) => return collect_plan(&dir, plan.partial),
         (Some(_), Some(_)) => return Err(both_file_and_collect(B::KIND)),

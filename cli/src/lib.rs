@@ -78,18 +78,8 @@ pub fn main_with(app: Regolith) -> ExitCode {
             CheckpointEvery(checkpoint_every),
             &record,
         ),
-        Command::Sweep {
-            sweep,
-            out,
-            jobs,
-            plan,
-        } => batch_command::<Sweep>(&registries, sweep, out, jobs, plan),
-        Command::Study {
-            study,
-            out,
-            jobs,
-            plan,
-        } => batch_command::<Study>(&registries, study, out, jobs, plan),
+        Command::Sweep { sweep, batch } => batch_command::<Sweep>(&registries, sweep, batch),
+        Command::Study { study, batch } => batch_command::<Study>(&registries, study, batch),
         Command::Fit {
             runs,
             body,

@@ -23,24 +23,56 @@ use serde::Deserialize;
 
 use crate::body::Body;
 use crate::grid::{GridField, GridGeometry};
-use crate::sim::{Boundaries, Clock};
-use crate::step::apply_walls;
+use crate::registry::{DynItem, Item};
+use crate::resources::{Boundaries, Clock};
+use crate::step::{Core, StepSet, apply_walls};
 
-/// The contact law between bodies.
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
-pub enum Contact {
-    /// One shared velocity at shared nodes (bodies stick together once they share a node).
-    #[default]
-    NoSlip,
-    /// Coulomb friction with coefficient `friction` between surfaces; no force on
-    /// separating bodies.
-    Frictional {
-        /// The surface friction coefficient `mu_surf` (the paper uses 0.1).
-        friction: f64,
-        /// Where the contact normal comes from; default `Common`.
-        #[serde(default)]
-        normal: NormalRule,
-    },
+/// A contact law between bodies: a kind of scene item (`contact: Frictional(friction: 0.1)`),
+/// so a plugin may add one. Its system sits in the core of the Contact set, which only
+/// scenes of two or more bodies run.
+pub trait Contact: DynItem {
+    /// Whether the law needs the mass gradient (surface normal) of the body called `body`
+    /// in a scene of `bodies` bodies; the scatter accumulates it only then.
+    fn needs_normal_of(&self, body: &str, bodies: usize) -> bool;
+    /// The body whose normal the law uses for every contact, if it names one (the scene
+    /// check makes sure it exists).
+    fn normal_body(&self) -> Option<&str> {
+        None
+    }
+    /// Adds the law's resources and its system, in `Core(StepSet::Contact)`.
+    fn install(&self, world: &mut World, schedule: &mut Schedule);
+}
+
+crate::item_kind!(Contact, "contact law");
+
+/// One shared velocity at shared nodes (bodies stick together once they share a node).
+#[derive(Clone, Copy, Debug, Deserialize)]
+pub struct NoSlip;
+
+impl Item for NoSlip {
+    const NAME: &'static str = "NoSlip";
+    const UNIT: bool = true;
+}
+
+impl Contact for NoSlip {
+    fn needs_normal_of(&self, _body: &str, _bodies: usize) -> bool {
+        false
+    }
+    fn install(&self, _world: &mut World, schedule: &mut Schedule) {
+        schedule.add_systems(no_slip.in_set(Core(StepSet::Contact)));
+    }
+}
+
+/// Coulomb friction with coefficient `friction` between surfaces; no force on separating
+/// bodies.
+#[derive(Clone, Debug, Deserialize, Resource)]
+#[serde(deny_unknown_fields)]
+pub struct Frictional {
+    /// The surface friction coefficient `mu_surf` (the paper uses 0.1).
+    pub friction: f64,
+    /// Where the contact normal comes from; default `Common`.
+    #[serde(default)]
+    pub normal: NormalRule,
 }
 
 /// How the contact normal at a node is made.
@@ -55,23 +87,43 @@ pub enum NormalRule {
     Body(String),
 }
 
-impl Contact {
-    /// Whether the law needs the mass gradient (surface normal) of the body called `body`
-    /// in a scene of `bodies` bodies. The common normal needs every body's. A named normal
-    /// needs only the named body's when there are two bodies: wherever it is absent from a
-    /// shared node only one body is present, which gets no impulse whatever its normal.
-    /// With three or more, a node without the named body falls back to the common normal of
-    /// the others, so every body keeps its gradient. Leaving the unused gradients out saves
-    /// one of the bed's four accumulations per node in the scatter, and its clear, in the
-    /// paper's scenes (all name their intruder).
-    pub fn needs_normal_of(&self, body: &str, bodies: usize) -> bool {
-        match self {
-            Contact::NoSlip => false,
-            Contact::Frictional { normal, .. } => match normal {
-                NormalRule::Common => bodies > 1,
-                NormalRule::Body(named) => bodies > 2 || (bodies == 2 && named == body),
-            },
+impl Item for Frictional {
+    const NAME: &'static str = "Frictional";
+    fn validate(&self) -> Result<(), String> {
+        if self.friction.is_finite() && self.friction >= 0.0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "the contact friction must be a non-negative number, got {}",
+                self.friction
+            ))
         }
+    }
+}
+
+impl Contact for Frictional {
+    /// The common normal needs every body's gradient. A named normal needs only the named
+    /// body's when there are two bodies: wherever it is absent from a shared node only one
+    /// body is present, which gets no impulse whatever its normal. With three or more, a
+    /// node without the named body falls back to the common normal of the others, so every
+    /// body keeps its gradient. Leaving the unused gradients out saves one of the bed's four
+    /// accumulations per node in the scatter, and its clear, in the paper's scenes (all name
+    /// their intruder).
+    fn needs_normal_of(&self, body: &str, bodies: usize) -> bool {
+        match &self.normal {
+            NormalRule::Common => bodies > 1,
+            NormalRule::Body(named) => bodies > 2 || (bodies == 2 && named == body),
+        }
+    }
+    fn normal_body(&self) -> Option<&str> {
+        match &self.normal {
+            NormalRule::Common => None,
+            NormalRule::Body(name) => Some(name),
+        }
+    }
+    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+        world.insert_resource(self.clone());
+        schedule.add_systems(frictional.in_set(Core(StepSet::Contact)));
     }
 }
 
@@ -226,15 +278,13 @@ fn apply_impulse(f: &mut GridField, n: usize, impulse: DVec2, dt: f64) {
 /// visits bodies in the same order both times).
 pub fn frictional(
     clock: Res<Clock>,
-    contact: Res<ContactLaw>,
+    contact: Res<Frictional>,
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
     mut scratch: Local<ContactScratch>,
     mut bodies: Query<(&Body, &mut GridField)>,
 ) {
-    let Contact::Frictional { friction, normal } = &contact.0 else {
-        return;
-    };
+    let Frictional { friction, normal } = &*contact;
     let (friction, dt) = (*friction, clock.dt);
     let s = &mut *scratch;
     let nodes = bodies.iter().next().map_or(0, |(_, f)| f.mass.len());
@@ -295,10 +345,6 @@ pub fn frictional(
         apply_walls(&grid, &walls.0, &mut f, Some(dt));
     }
 }
-
-/// The scene's contact law, as a resource for the contact systems.
-#[derive(Resource, Clone, Debug)]
-pub struct ContactLaw(pub Contact);
 
 #[cfg(test)]
 mod tests {

@@ -19,7 +19,7 @@ use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points};
 use crate::registry::{DynItem, Item};
-use crate::sim::Clock;
+use crate::resources::Clock;
 use crate::step::{Core, MaterialUpdates, StepSet};
 use crate::stress::Stress;
 

@@ -6,6 +6,10 @@
 //! truncated file that looks complete; the trajectory grows in `trajectory.csv.part` and is
 //! renamed when the run ends.
 
+pub mod flow_field;
+pub mod free_surface;
+pub mod front;
+pub mod impact;
 pub mod snapshots;
 pub mod summary;
 pub mod trajectory;
@@ -21,7 +25,7 @@ use bevy_ecs::prelude::*;
 use crate::error::Fault;
 use crate::plugin::Install;
 use crate::registry::DynItem;
-use crate::sim::Clock;
+use crate::resources::Clock;
 
 /// The directory a run writes into, if it writes files at all (tests run without one).
 #[derive(Resource, Clone, Debug, Default)]
@@ -50,7 +54,7 @@ crate::item_kind!(Output, "output");
 
 /// A fixed output interval in simulated time: due at t = 0, then every `every` seconds, and
 /// at the last step.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Interval {
     pub every: f64,
     next: f64,

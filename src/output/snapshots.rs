@@ -15,7 +15,7 @@ use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::plugin::Install;
 use crate::registry::Item;
-use crate::sim::Clock;
+use crate::resources::Clock;
 use crate::step::StepSet;
 
 #[derive(Clone, Debug, Deserialize)]

@@ -12,7 +12,7 @@ use bevy_ecs::prelude::*;
 
 use super::OutputFaults;
 use crate::body::{Body, BodyState};
-use crate::sim::Clock;
+use crate::resources::Clock;
 
 #[derive(Resource, Debug, Default)]
 pub struct Trajectory {

@@ -2,12 +2,12 @@
 
 use std::collections::HashSet;
 
-use super::{InitialStress, Scene, StressUpdate, TimeStep, Transfer, Wall};
-use crate::contact::{Contact, NormalRule};
+use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
-use crate::shape_functions::Integration;
+use crate::registry::Item;
+use crate::shape_functions::Linear;
 use glam::DVec2;
 
 /// Largest grid (cells) and body (points) a scene may ask for: beyond these the state
@@ -74,7 +74,7 @@ impl Scene {
                 "the fixed time step is above the CFL limit (c dt / h = {cfl:.3} > 1) and the run may diverge; allowed by time.allow_unstable"
             ));
         }
-        if self.integration == Integration::Linear && self.update == StressUpdate::Usl {
+        if self.integration.name() == Linear::NAME && self.update == StressUpdate::Usl {
             w.push(
                 "Linear integration with update Usl amplifies round-off at nodes of tiny mass and can blow up (docs/numerics.md); CpdiFixed or update: Musl avoid it"
                     .to_string(),
@@ -222,7 +222,7 @@ impl Scene {
                 format!("flip must lie in [0, 1] (1 = pure FLIP), got {}", self.flip),
             );
         }
-        if self.transfer != Transfer::Flip && self.flip != 1.0 {
+        if !self.transfer.blends() && self.flip != 1.0 {
             return err(
                 "flip",
                 format!(
@@ -231,33 +231,13 @@ impl Scene {
                 ),
             );
         }
-        if let Transfer::AffineFlip { relaxation } = self.transfer
-            && !(relaxation.is_finite() && relaxation > 0.0)
+        if let Some(name) = self.contact.normal_body()
+            && !self.bodies.iter().any(|b| b.name == name)
         {
             return err(
-                "transfer",
-                format!(
-                    "relaxation must be a positive number of p-wave crossings of a cell, got {relaxation}"
-                ),
+                "normal",
+                format!("the contact normal names body \"{name}\", which the scene does not have"),
             );
-        }
-        if let Contact::Frictional { friction, normal } = &self.contact {
-            if !(friction.is_finite() && *friction >= 0.0) {
-                return err(
-                    "friction",
-                    format!("the contact friction must be a non-negative number, got {friction}"),
-                );
-            }
-            if let NormalRule::Body(name) = normal
-                && !self.bodies.iter().any(|b| b.name == *name)
-            {
-                return err(
-                    "normal",
-                    format!(
-                        "the contact normal names body \"{name}\", which the scene does not have"
-                    ),
-                );
-            }
         }
         if self.bodies.is_empty() {
             return err("bodies", "the scene needs at least one body".to_string());

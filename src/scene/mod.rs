@@ -15,16 +15,19 @@ use std::path::Path;
 use std::sync::Arc;
 
 use glam::DVec2;
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
 use crate::condition::Condition;
-use crate::contact::Contact;
+use crate::contact::{Contact, NoSlip};
 use crate::error::SceneError;
 use crate::geometry::Shape;
 use crate::material::MaterialSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
-use crate::shape_functions::Integration;
+use crate::shape_functions::{CpdiFixed, ShapeFunctions};
+use crate::velocity::{AffineFlip, Transfer};
+
+pub use crate::resources::{TimeStep, Wall, Walls};
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]
@@ -41,9 +44,10 @@ pub struct Scene {
     #[serde(default = "default_gravity")]
     pub gravity: DVec2,
     pub walls: Walls,
-    /// Shape-function scheme; default `CpdiFixed` (the paper's).
-    #[serde(default)]
-    pub integration: Integration,
+    /// Shape-function scheme: `CpdiFixed` (the paper's, default), `Linear` or
+    /// `QuadraticBspline`, or a plugin's.
+    #[serde(default = "default_integration")]
+    pub integration: Named<dyn ShapeFunctions>,
     /// Where the velocity gradient comes from: `Usl` (the paper) or `Musl`; default `Usl`.
     #[serde(default)]
     pub update: StressUpdate,
@@ -51,13 +55,13 @@ pub struct Scene {
     #[serde(default)]
     pub dilatation: Dilatation,
     /// How bodies interact where they share grid nodes: `NoSlip` (default) or
-    /// `Frictional(friction: mu)`.
-    #[serde(default)]
-    pub contact: Contact,
+    /// `Frictional(friction: mu)`, or a plugin's law.
+    #[serde(default = "default_contact")]
+    pub contact: Named<dyn Contact>,
     /// How velocities go from the grid back to the points: `AffineFlip(relaxation: 25)` (the
     /// default), `Flip` (the paper's) or `Apic` (affine particle-in-cell); docs/numerics.md.
-    #[serde(default)]
-    pub transfer: Transfer,
+    #[serde(default = "default_transfer")]
+    pub transfer: Named<dyn Transfer>,
     /// FLIP fraction of the point velocity update with `transfer: Flip`: 1 is pure FLIP (the
     /// paper), 0 pure PIC.
     #[serde(default = "default_flip")]
@@ -84,6 +88,18 @@ pub struct Scene {
     pub registries: Arc<Registries>,
 }
 
+fn default_integration() -> Named<dyn ShapeFunctions> {
+    Named(Box::new(CpdiFixed))
+}
+
+fn default_contact() -> Named<dyn Contact> {
+    Named(Box::new(NoSlip))
+}
+
+fn default_transfer() -> Named<dyn Transfer> {
+    Named(Box::new(AffineFlip::default()))
+}
+
 fn default_gravity() -> DVec2 {
     DVec2::new(0.0, -9.81)
 }
@@ -102,61 +118,6 @@ pub enum StressUpdate {
     /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
     /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
     Musl,
-}
-
-/// The grid-to-point velocity transfer (docs/numerics.md, "Dense flow").
-///
-/// Every transfer updates a point's velocity the same way: its FLIP update `v + dt a_grid`
-/// is pulled part of the way to the grid's velocity at the point ([`Transfer::pull`]). They
-/// differ in how far, and in whether the point hands the grid an affine field too.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-pub enum Transfer {
-    /// FLIP (the paper's transfer): each point keeps its velocity and adds the grid's
-    /// acceleration, optionally blended with PIC by `flip` at every step, a damping whose
-    /// size is set by the step.
-    Flip,
-    /// APIC (Jiang et al. 2015): each point takes the grid velocity at its position and the
-    /// affine field `C_p` around it, which it hands back to the grid in the next scatter.
-    /// Conserves linear and angular momentum and reproduces affine fields; but the
-    /// projection is made at every step, so what it dissipates grows as the step shrinks
-    /// (the impact's depth falls from 0.31 to 0.18 m between CFL 1 and 0.05).
-    Apic,
-    /// The default (`relaxation: 25`): APIC's affine scatter with FLIP's velocity update,
-    /// whose departure from the grid's velocity relaxes over `relaxation` p-wave crossings
-    /// of a cell, `tau = relaxation h / c` (the unit of the CFL number, so a step removes
-    /// the fraction `1 - exp(-CFL / relaxation)`). The damping is fixed in time, so the
-    /// answer converges in the step, and `tau` shrinks with the cell.
-    AffineFlip { relaxation: f64 },
-}
-
-/// The default transfer's relaxation, in p-wave crossings of a cell (docs/numerics.md,
-/// "Affine FLIP": how it was chosen).
-pub const DEFAULT_RELAXATION: f64 = 25.0;
-
-impl Default for Transfer {
-    fn default() -> Self {
-        Transfer::AffineFlip {
-            relaxation: DEFAULT_RELAXATION,
-        }
-    }
-}
-
-impl Transfer {
-    /// Whether points carry an affine field `C_p` and hand it to the grid.
-    pub fn affine(&self) -> bool {
-        !matches!(self, Transfer::Flip)
-    }
-
-    /// The fraction of the way from its FLIP update to the grid's velocity that a point's
-    /// velocity moves in a step `dt`, for a body of p-wave speed `c` on cells of size `h`:
-    /// `1 - flip` with FLIP, 1 with APIC, `1 - exp(-dt c / (relaxation h))` with affine FLIP.
-    pub fn pull(&self, flip: f64, dt: f64, h: f64, c: f64) -> f64 {
-        match *self {
-            Transfer::Flip => 1.0 - flip,
-            Transfer::Apic => 1.0,
-            Transfer::AffineFlip { relaxation } => -(-dt * c / (relaxation * h)).exp_m1(),
-        }
-    }
 }
 
 /// How the volumetric part of the velocity gradient is taken (docs/numerics.md).
@@ -207,55 +168,6 @@ pub struct Limits {
     /// body moving at 1% of its p-wave speed (the energy of a 1% elastic strain).
     #[serde(default)]
     pub max_kinetic_energy: Option<f64>,
-}
-
-/// How the time step is chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub enum TimeStep {
-    /// A fixed step (s).
-    Fixed(f64),
-    /// `dt = C h / max_b (c_b + max |v_p|)`, recomputed every step.
-    Cfl(f64),
-}
-
-impl TimeStep {
-    /// The step the rule gives on cells of size `h` for the fastest signal `signal`
-    /// (`c + |v|`); `otherwise` when a CFL rule has no signal to go by (nothing moves and no
-    /// material has a wave speed).
-    pub fn dt(self, h: f64, signal: f64, otherwise: f64) -> f64 {
-        match self {
-            TimeStep::Fixed(dt) => dt,
-            TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
-            TimeStep::Cfl(_) => otherwise,
-        }
-    }
-}
-
-/// The four sides of the domain.
-#[derive(Clone, Copy, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Walls {
-    pub left: Wall,
-    pub right: Wall,
-    pub bottom: Wall,
-    pub top: Wall,
-}
-
-/// Boundary condition on one side.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-pub enum Wall {
-    /// No constraint: material leaving the domain stops the run.
-    Free,
-    /// No constraint, and material crossing it leaves the simulation: its points are
-    /// retired (mass, velocity, stress set to zero, parked on the boundary) and counted in
-    /// `summary.json` (an open box top that a splash may leave).
-    Open,
-    /// Frictionless: the normal velocity is zero, the tangential one free.
-    Slip,
-    /// Both velocity components are zero.
-    NoSlip,
-    /// Wraps to the opposite side (which must be periodic too).
-    Periodic,
 }
 
 /// One body.

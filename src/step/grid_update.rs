@@ -15,8 +15,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::{GridField, GridGeometry};
-use crate::scene::{Wall, Walls};
-use crate::sim::{Boundaries, Clock, Gravity};
+use crate::resources::{Boundaries, Clock, Gravity, Wall, Walls};
 
 pub fn update_grid(
     clock: Res<Clock>,

@@ -2,7 +2,7 @@
 //!
 //! [`schedule`] lists every core system in its set, in order: read it first. The other
 //! modules are the systems: `prepare` (the clock), `locate` (each point's footprint, cell
-//! and band), `transfer` (scatter, gather, MUSL, advection), `cell_average` (the
+//! and band), `transfer` (scatter, gather, MUSL's passes, the move), `cell_average` (the
 //! cell-averaged dilatation, stress trace and density), `grid_update` (walls) and `bands`
 //! (the lock-free parallel scatter).
 
@@ -20,5 +20,6 @@ pub use grid_update::{apply_walls, update_grid};
 pub use locate::{Location, locate_points};
 pub use prepare::signal_speed;
 pub use schedule::{
-    Core, MaterialUpdates, StepOptions, StepSchedule, StepSet, Timings, build_schedule, output_due,
+    Core, MaterialUpdates, StepOptions, StepSchedule, StepSet, Timings, add_transfers,
+    build_schedule, output_due,
 };

@@ -6,8 +6,7 @@ use crate::body::{Body, BodyState};
 use crate::diagnostics::Health;
 use crate::error::Fault;
 use crate::grid::{GridField, GridGeometry};
-use crate::scene::TimeStep;
-use crate::sim::Clock;
+use crate::resources::{Clock, OutputClock, StepRule, TimeStep};
 
 /// Fastest signal of the scene: each body's p-wave speed plus its fastest point.
 pub fn signal_speed<'a>(bodies: impl Iterator<Item = (&'a Body, &'a BodyState)>) -> f64 {
@@ -20,6 +19,7 @@ pub fn signal_speed<'a>(bodies: impl Iterator<Item = (&'a Body, &'a BodyState)>)
 /// records the CFL number actually used.
 pub fn choose_time_step(
     mut clock: ResMut<Clock>,
+    mut rule: ResMut<StepRule>,
     grid: Res<GridGeometry>,
     mut health: ResMut<Health>,
     bodies: Query<(&Body, &BodyState)>,
@@ -27,14 +27,14 @@ pub fn choose_time_step(
     let h = grid.cell_size;
     let signal = signal_speed(bodies.iter());
     let remaining = clock.end - clock.time;
-    let mut dt = clock.rule.dt(h, signal, remaining);
-    clock.dt_min = clock.dt_min.min(dt);
-    clock.dt_max = clock.dt_max.max(dt);
+    let mut dt = rule.rule.dt(h, signal, remaining);
+    rule.dt_min = rule.dt_min.min(dt);
+    rule.dt_max = rule.dt_max.max(dt);
     let cfl = dt * signal / h;
-    clock.cfl_max = clock.cfl_max.max(cfl);
+    rule.cfl_max = rule.cfl_max.max(cfl);
     // Only a fixed step can outgrow the limit (a CFL rule stays on it up to round-off).
-    let fixed = matches!(clock.rule, TimeStep::Fixed(_));
-    if fixed && cfl > 1.0 && !clock.allow_unstable && health.fault.is_none() {
+    let fixed = matches!(rule.rule, TimeStep::Fixed(_));
+    if fixed && cfl > 1.0 && !rule.allow_unstable && health.fault.is_none() {
         let (body, fastest) = bodies
             .iter()
             .max_by(|a, b| a.1.max_speed.total_cmp(&b.1.max_speed))
@@ -75,13 +75,7 @@ pub fn advance_clock(mut clock: ResMut<Clock>) {
 }
 
 /// Flags an output at t = 0, at every `output_every`, and at the end.
-pub fn decide_output(mut clock: ResMut<Clock>) {
-    let eps = 1e-9 * clock.output_every;
-    let due = clock.observing || clock.last_step || clock.time >= clock.next_output - eps;
-    if due {
-        while clock.next_output <= clock.time + eps {
-            clock.next_output += clock.output_every;
-        }
-    }
-    clock.output_due = due;
+pub fn decide_output(clock: Res<Clock>, mut outputs: ResMut<OutputClock>) {
+    let outputs = &mut *outputs;
+    outputs.due = outputs.interval.due(&clock);
 }

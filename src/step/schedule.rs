@@ -3,8 +3,10 @@
 //! ```text
 //! Prepare            choose_time_step, clear_grids
 //! ParticleToGrid     locate_points::<S>, average_stress_trace, particle_to_grid
+//!                    (S: the scene's shape functions, `ShapeFunctions::add_transfers`)
 //! GridUpdate         update_grid
-//! Contact            no_slip | frictional                      (two or more bodies)
+//! Contact            the scene's contact law: no_slip | frictional (two or more bodies;
+//!                    added by the law item, `Contact::install`)
 //! GridToParticle     grid_to_particle | affine_to_particle::<S> (USL)
 //!                    | musl_velocity, musl_remap, musl_gradient | musl_apic_gradient::<S> (MUSL)
 //!                    then average_dilatation, advect_points, cell_density (CellAveraged)
@@ -28,12 +30,11 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
 use super::{cell_average, grid_update, locate, prepare, transfer};
-use crate::contact::{self, Contact};
 use crate::diagnostics;
 use crate::output::trajectory;
-use crate::scene::{Dilatation, StressUpdate, Transfer};
-use crate::shape_functions::{CpdiFixed, Integration, Linear, QuadraticBspline, Scheme};
-use crate::sim::Clock;
+use crate::resources::{Clock, OutputClock};
+use crate::scene::{Dilatation, StressUpdate};
+use crate::shape_functions::{Scheme, ShapeFunctions};
 
 /// The stages of a step, run in this order.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -146,23 +147,22 @@ fn stepping(clock: Res<Clock>) -> bool {
 }
 
 /// An output time is due (set in Diagnostics).
-pub fn output_due(clock: Res<Clock>) -> bool {
-    clock.output_due
+pub fn output_due(outputs: Res<OutputClock>) -> bool {
+    outputs.due
 }
 
 /// The numerical options that decide which core systems a step has.
-#[derive(Clone, Debug)]
-pub struct StepOptions {
-    pub integration: Integration,
+#[derive(Clone, Copy, Debug)]
+pub struct StepOptions<'a> {
+    pub integration: &'a dyn ShapeFunctions,
     pub update: StressUpdate,
     pub dilatation: Dilatation,
-    pub transfer: Transfer,
-    /// The contact law between bodies; `None` with a single body.
-    pub contact: Option<Contact>,
+    /// Whether points carry an affine field (the transfer's `affine`).
+    pub affine: bool,
 }
 
 /// The schedule of one step with the core systems for the given options.
-pub fn build_schedule(options: StepOptions) -> Schedule {
+pub fn build_schedule(options: &StepOptions) -> Schedule {
     let mut schedule = Schedule::new(StepSchedule);
     schedule.set_executor(SingleThreadedExecutor::new());
     schedule.set_build_settings(ScheduleBuildSettings {
@@ -176,21 +176,10 @@ pub fn build_schedule(options: StepOptions) -> Schedule {
             .chain()
             .in_set(Core(StepSet::Prepare)),
     );
-    match options.integration {
-        Integration::Linear => add_transfers::<Linear>(&mut schedule, &options),
-        Integration::CpdiFixed => add_transfers::<CpdiFixed>(&mut schedule, &options),
-        Integration::QuadraticBspline => add_transfers::<QuadraticBspline>(&mut schedule, &options),
-    }
+    options.integration.add_transfers(&mut schedule, options);
     schedule.add_systems(grid_update::update_grid.in_set(Core(StepSet::GridUpdate)));
-    match options.contact {
-        None => {}
-        Some(Contact::NoSlip) => {
-            schedule.add_systems(contact::no_slip.in_set(Core(StepSet::Contact)));
-        }
-        Some(Contact::Frictional { .. }) => {
-            schedule.add_systems(contact::frictional.in_set(Core(StepSet::Contact)));
-        }
-    }
+    // Contact: the contact law item adds its system to `Core(StepSet::Contact)`
+    // (`Contact::install`), in scenes of two or more bodies.
     let after_gather = Core(StepSet::GridToParticle);
     match options.dilatation {
         Dilatation::PerPoint => {
@@ -252,7 +241,7 @@ fn configure_sets(schedule: &mut Schedule) {
 }
 
 /// The scatter and the gather for shape functions `S`.
-fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: &StepOptions) {
+pub fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: &StepOptions) {
     schedule.add_systems(
         (
             locate::locate_points::<S>,
@@ -263,7 +252,7 @@ fn add_transfers<S: Scheme>(schedule: &mut Schedule, options: &StepOptions) {
             .in_set(Core(StepSet::ParticleToGrid)),
     );
     let gather = Core(StepSet::GridToParticle);
-    let affine = options.transfer.affine();
+    let affine = options.affine;
     match (options.update, affine) {
         (StressUpdate::Usl, false) => {
             schedule.add_systems(transfer::grid_to_particle.in_set(gather).in_set(Gather));

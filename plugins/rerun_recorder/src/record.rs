@@ -13,7 +13,7 @@ use regolith::body::{Body, BodyState, PointStates, Points};
 use regolith::glam::DVec2;
 use regolith::grid::{GridField, GridGeometry};
 use regolith::output::{OutputFaults, RunDir};
-use regolith::sim::Clock;
+use regolith::resources::{Clock, OutputClock};
 use rerun::{
     AnyValues, Arrows2D, LineStrips2D, Points2D, RecordingStream, RecordingStreamBuilder, Scalars,
 };
@@ -112,6 +112,7 @@ const VIEWER: &str = "cannot start the Rerun viewer (install the one matching th
 /// Logs a frame when one is due.
 pub fn record(
     clock: Res<Clock>,
+    outputs: Res<OutputClock>,
     dir: Res<RunDir>,
     grid: Res<GridGeometry>,
     mut recorder: ResMut<Recorder>,
@@ -120,7 +121,7 @@ pub fn record(
 ) {
     let due = match recorder.params.every {
         Some(n) => clock.observing || clock.last_step || clock.step.is_multiple_of(n),
-        None => clock.output_due,
+        None => outputs.due,
     };
     if !due || faults.any() {
         return;

@@ -19,7 +19,7 @@ use crate::body::{Body, PointStates, Points};
 use crate::grid::{GridField, GridGeometry};
 use crate::plugin::Install;
 use crate::registry::Item;
-use crate::sim::Clock;
+use crate::resources::Clock;
 use crate::step::StepSet;
 pub use xml::{Entry, read_collection};
 

@@ -19,7 +19,7 @@ use crate::body::{Body, BodyState, Points};
 use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
-use crate::sim::Clock;
+use crate::resources::Clock;
 use crate::step::StepSet;
 
 #[derive(Clone, Debug, Deserialize)]

@@ -16,7 +16,7 @@ use crate::grid::GridGeometry;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
-use crate::sim::Clock;
+use crate::resources::Clock;
 use crate::step::StepSet;
 
 #[derive(Clone, Debug, Deserialize)]

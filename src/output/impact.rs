@@ -37,7 +37,7 @@ use crate::output::summary::Section;
 use crate::output::trajectory::Trajectory;
 use crate::plugin::Install;
 use crate::registry::Item;
-use crate::sim::Clock;
+use crate::resources::Clock;
 
 /// At rest: the final speed is below this fraction of the speed at first contact.
 pub const REST_SPEED_FRACTION: f64 = 0.01;

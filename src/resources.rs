@@ -1,0 +1,144 @@
+//! The simulation's global state, as resources every system may read: the clock, the time-step
+//! rule, the output clock, gravity, the walls and the velocity rule.
+//!
+//! They live here, not with the scene format or the world builder, so that the step's systems
+//! depend on neither: the builder (`sim`) fills them from a scene, the systems read them, and
+//! a checkpoint saves the three that change (the clock, the step rule's record, the output
+//! clock). The wall and time-step types are also the scene format's (`scene` re-exports them).
+
+use bevy_ecs::prelude::*;
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::output::Interval;
+use crate::velocity::Transfer;
+
+/// Simulated time and the step count.
+#[derive(Resource, Clone, Debug, Serialize, Deserialize)]
+pub struct Clock {
+    pub time: f64,
+    pub dt: f64,
+    pub step: u64,
+    pub end: f64,
+    /// True only while the t = 0 state is being observed (no step is taken).
+    pub observing: bool,
+    /// This step lands on the end time.
+    pub last_step: bool,
+}
+
+impl Clock {
+    /// At t = 0, observing the initial state, to run until `end`.
+    pub fn start(end: f64) -> Clock {
+        Clock {
+            time: 0.0,
+            dt: 0.0,
+            step: 0,
+            end,
+            observing: true,
+            last_step: false,
+        }
+    }
+}
+
+/// The scene's time-step rule, and the steps it has given so far.
+#[derive(Resource, Clone, Debug, Serialize, Deserialize)]
+pub struct StepRule {
+    pub rule: TimeStep,
+    /// A fixed step may exceed the CFL limit (the scene's `time.allow_unstable`).
+    pub allow_unstable: bool,
+    pub dt_min: f64,
+    pub dt_max: f64,
+    /// Largest CFL number used so far.
+    pub cfl_max: f64,
+}
+
+impl StepRule {
+    pub fn new(rule: TimeStep, allow_unstable: bool) -> StepRule {
+        StepRule {
+            rule,
+            allow_unstable,
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+            cfl_max: 0.0,
+        }
+    }
+}
+
+/// The scene's output interval (`time.output_every`): trajectory rows and the outputs that
+/// follow it are written when `due`, set in the Diagnostics set.
+#[derive(Resource, Clone, Debug, Serialize, Deserialize)]
+pub struct OutputClock {
+    pub interval: Interval,
+    pub due: bool,
+}
+
+/// Body force per unit mass.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct Gravity(pub DVec2);
+
+/// The walls of the domain.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct Boundaries(pub Walls);
+
+/// How the points' velocities follow the grid: the scene's transfer and its FLIP fraction.
+#[derive(Resource, Clone, Debug)]
+pub struct VelocityRule {
+    pub transfer: Box<dyn Transfer>,
+    pub flip: f64,
+}
+
+impl VelocityRule {
+    /// [`Transfer::pull`] for a step `dt` of a body of p-wave speed `c` on cells of size `h`.
+    pub fn pull(&self, dt: f64, h: f64, c: f64) -> f64 {
+        self.transfer.pull(self.flip, dt, h, c)
+    }
+}
+
+/// How the time step is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum TimeStep {
+    /// A fixed step (s).
+    Fixed(f64),
+    /// `dt = C h / max_b (c_b + max |v_p|)`, recomputed every step.
+    Cfl(f64),
+}
+
+impl TimeStep {
+    /// The step the rule gives on cells of size `h` for the fastest signal `signal`
+    /// (`c + |v|`); `otherwise` when a CFL rule has no signal to go by (nothing moves and no
+    /// material has a wave speed).
+    pub fn dt(self, h: f64, signal: f64, otherwise: f64) -> f64 {
+        match self {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Cfl(c) if signal > 0.0 => c * h / signal,
+            TimeStep::Cfl(_) => otherwise,
+        }
+    }
+}
+
+/// The four sides of the domain.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Walls {
+    pub left: Wall,
+    pub right: Wall,
+    pub bottom: Wall,
+    pub top: Wall,
+}
+
+/// Boundary condition on one side.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum Wall {
+    /// No constraint: material leaving the domain stops the run.
+    Free,
+    /// No constraint, and material crossing it leaves the simulation: its points are
+    /// retired (mass, velocity, stress set to zero, parked on the boundary) and counted in
+    /// `summary.json` (an open box top that a splash may leave).
+    Open,
+    /// Frictionless: the normal velocity is zero, the tangential one free.
+    Slip,
+    /// Both velocity components are zero.
+    NoSlip,
+    /// Wraps to the opposite side (which must be periodic too).
+    Periodic,
+}
