@@ -152,6 +152,9 @@ impl Checkpoint {
         for output in &scene.outputs {
             output.resume(&mut sim.world, time);
         }
+        for condition in &scene.conditions {
+            condition.resume(&mut sim.world, time);
+        }
         if let (Some(mut watch), Some((contact, before))) =
             (sim.world.get_resource_mut::<ImpactWatch>(), self.impact)
         {

@@ -113,9 +113,7 @@ impl Regolith {
         systems: impl IntoScheduleConfigs<ScheduleSystem, M> + Clone + Send + Sync + 'static,
     ) -> &mut Self {
         self.registries.push_systems(Arc::new(move |schedule| {
-            let configs: ScheduleConfigs<ScheduleSystem> =
-                systems.clone().in_set(set).after(Core(set));
-            schedule.add_systems(configs);
+            schedule.add_systems(after_core(set, systems.clone()));
         }));
         self
     }
@@ -152,8 +150,7 @@ impl<'a> Install<'a> {
         set: StepSet,
         systems: impl IntoScheduleConfigs<ScheduleSystem, M>,
     ) -> &mut Self {
-        self.schedule
-            .add_systems(systems.in_set(set).after(Core(set)));
+        self.schedule.add_systems(after_core(set, systems));
         self
     }
 
@@ -166,6 +163,15 @@ impl<'a> Install<'a> {
     pub fn world(&mut self) -> &mut World {
         self.world
     }
+}
+
+/// `systems` in step set `set`, after its core systems: where every system a plugin or a
+/// scene item adds goes.
+fn after_core<M>(
+    set: StepSet,
+    systems: impl IntoScheduleConfigs<ScheduleSystem, M>,
+) -> ScheduleConfigs<ScheduleSystem> {
+    systems.in_set(set).after(Core(set))
 }
 
 /// Parses scene text against the default plugins (a convenience for tests and examples).

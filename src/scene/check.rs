@@ -126,6 +126,9 @@ impl Scene {
     /// source, used to point at a line.
     pub(super) fn check(&self, text: &str, origin: &str) -> Result<(), SceneError> {
         let err = |needle: &str, message: String| Err(near(text, origin, needle, message));
+        // A scene item's own check, reported at the item: `Name(`.
+        let item_err =
+            |name: &str, message: String| err(&format!("{name}("), format!("{name}: {message}"));
         if self.name.trim().is_empty() || self.name.contains(['/', '\\']) {
             return err(
                 "name",
@@ -258,20 +261,12 @@ impl Scene {
                     ),
                 ));
             }
-            if let Err(e) = output.check_scene(self) {
-                return err(
-                    &format!("{}(", output.name()),
-                    format!("{}: {e}", output.name()),
-                );
-            }
+            output.check_scene(self).or_else(|e| item_err(name, e))?;
         }
         for condition in &self.conditions {
-            if let Err(e) = condition.check_scene(self) {
-                return err(
-                    &format!("{}(", condition.name()),
-                    format!("{}: {e}", condition.name()),
-                );
-            }
+            condition
+                .check_scene(self)
+                .or_else(|e| item_err(condition.name(), e))?;
         }
         if let Some(cfl) = self.fixed_step_cfl()
             && cfl > 1.0
