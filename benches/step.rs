@@ -8,7 +8,7 @@ use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::shape_functions::{CpdiFixed, Footprint, Scheme};
 use regolith::sim::on_worker;
-use regolith::step::transfer::{grid_to_particle, particle_to_grid};
+use regolith::step::transfer::{affine_to_particle, particle_to_grid};
 use regolith::step::{locate_points, update_grid};
 use regolith::{Regolith, Scene, Simulation};
 
@@ -37,8 +37,15 @@ fn systems(c: &mut Criterion) {
     c.bench_function("p2g_30k", |b| {
         b.iter(|| on_worker(|| world.run_system_once(particle_to_grid).unwrap()))
     });
-    c.bench_function("g2p_usl_30k", |b| {
-        b.iter(|| on_worker(|| world.run_system_once(grid_to_particle).unwrap()))
+    // The default transfer (affine FLIP): the USL gather with the affine field.
+    c.bench_function("g2p_affine_30k", |b| {
+        b.iter(|| {
+            on_worker(|| {
+                world
+                    .run_system_once(affine_to_particle::<CpdiFixed>)
+                    .unwrap()
+            })
+        })
     });
     c.bench_function("constitutive_mui_30k", |b| {
         b.iter(|| on_worker(|| world.run_system_once(update_stress::<MuI>).unwrap()))

@@ -114,6 +114,9 @@ pub struct PointStates {
 }
 
 impl PointStates {
+    /// Bytes held per point (for memory estimates).
+    pub const BYTES_PER_POINT: usize = 8 + 8 + std::mem::size_of::<Phase>();
+
     pub fn new(points: usize) -> Self {
         PointStates {
             plastic_strain_rate: vec![0.0; points],

@@ -267,38 +267,70 @@ pub fn summarize(
     }
 }
 
-/// Rough memory use of a scene's state in bytes: points, material history and one nodal
-/// field per body.
-pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> usize {
-    let nodes = sim.grid().node_count();
-    let cells = sim.grid().cells[0] * sim.grid().cells[1];
-    let averaging = if scene.dilatation == crate::scene::Dilatation::CellAveraged {
-        16 * cells
-    } else {
-        0
-    };
-    let affine = if scene.transfer.affine() {
+/// The memory a scene's state takes: what every point carries (its columns, material
+/// history, phase and rates, footprint, cell and band) and what the grid holds (one nodal
+/// field per body, the cell sums). Point columns that are empty for a body (the affine
+/// field of a FLIP scene, history of a history-free material) are not counted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemoryEstimate {
+    pub points: usize,
+    /// Bytes of per-point state, all bodies together.
+    pub point_bytes: usize,
+    /// Bytes of nodal fields and cell sums.
+    pub grid_bytes: usize,
+}
+
+impl MemoryEstimate {
+    pub fn total(&self) -> usize {
+        self.point_bytes + self.grid_bytes
+    }
+
+    /// Bytes of state per point, the grid's share left out.
+    pub fn per_point(&self) -> f64 {
+        self.point_bytes as f64 / self.points.max(1) as f64
+    }
+}
+
+/// Bytes one point of a body made of `material` carries through a step, whatever its
+/// material: the columns of [`crate::body::Points`] (with the affine field if `affine`),
+/// [`crate::body::PointStates`], the footprint, cell and band of `step::Location` and its
+/// slot in the bands.
+pub fn bytes_per_point(material: &dyn crate::material::MaterialSpec, affine: bool) -> usize {
+    let affine = if affine {
         crate::body::Points::AFFINE_BYTES
     } else {
         0
     };
+    crate::body::Points::BYTES_PER_POINT
+        + affine
+        + crate::body::PointStates::BYTES_PER_POINT
+        + crate::shape_functions::Footprint::BYTES
+        + crate::step::Location::BYTES_PER_POINT
+        + material.history_bytes()
+}
+
+/// Memory use of a scene's state (see [`MemoryEstimate`]).
+pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
+    let nodes = sim.grid().node_count();
+    let cells = sim.grid().cells[0] * sim.grid().cells[1];
+    let averaging = if scene.dilatation == crate::scene::Dilatation::CellAveraged {
+        crate::step::CellDilatation::BYTES_PER_CELL * cells
+    } else {
+        0
+    };
     let counts: Vec<usize> = sim.bodies().iter().map(|b| b.2).collect();
-    scene
-        .bodies
-        .iter()
-        .zip(counts)
-        .map(|(spec, n)| {
-            n * (crate::body::Points::BYTES_PER_POINT
-                + affine
-                + crate::shape_functions::Footprint::BYTES
-                + spec.material.history_bytes())
-                + nodes
-                    * GridField::bytes_per_node(
-                        scene
-                            .contact
-                            .needs_normal_of(&spec.name, scene.bodies.len()),
-                    )
-                + averaging
-        })
-        .sum()
+    let mut estimate = MemoryEstimate {
+        points: 0,
+        point_bytes: 0,
+        grid_bytes: 0,
+    };
+    for (spec, n) in scene.bodies.iter().zip(counts) {
+        let normals = scene
+            .contact
+            .needs_normal_of(&spec.name, scene.bodies.len());
+        estimate.points += n;
+        estimate.point_bytes += n * bytes_per_point(&*spec.material, scene.transfer.affine());
+        estimate.grid_bytes += nodes * GridField::bytes_per_node(normals) + averaging;
+    }
+    estimate
 }

@@ -293,9 +293,14 @@ pub(crate) fn check(
     } else {
         "none (one body)".to_string()
     };
+    let blend = if scene.transfer.blends() {
+        format!(" (FLIP fraction {})", scene.flip)
+    } else {
+        String::new()
+    };
     println!(
-        "integration: {:?}, FLIP fraction {}, contact: {contact}",
-        scene.integration, scene.flip
+        "integration: {:?}, transfer: {:?}{blend}, contact: {contact}",
+        scene.integration, scene.transfer
     );
     if let Some(p) = scene.preset {
         println!("preset: {p:?} (its settings are in the lines above; --set wins over it)");
@@ -330,11 +335,14 @@ pub(crate) fn check(
             if body.tracked { ", tracked" } else { "" }
         );
     }
-    let bytes = memory_estimate(&mut sim, &scene);
+    let memory = memory_estimate(&mut sim, &scene);
+    let mib = |bytes: usize| bytes as f64 / (1024.0 * 1024.0);
     println!(
-        "particles: {}; state memory about {:.1} MiB",
+        "particles: {}; state memory about {:.1} MiB ({:.0} bytes per point, {:.1} MiB of grid)",
         sim.particle_count(),
-        bytes as f64 / (1024.0 * 1024.0)
+        mib(memory.total()),
+        memory.per_point(),
+        mib(memory.grid_bytes)
     );
     Ok(())
 }

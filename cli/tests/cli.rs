@@ -151,6 +151,8 @@ fn check_prints_the_resolved_setup() {
         "800 points",
         "first dt",
         "memory",
+        "bytes per point",
+        "transfer: AffineFlip",
         "p-wave speed 116.0",
     ] {
         assert!(text.contains(part), "missing {part:?} in\n{text}");

@@ -116,6 +116,25 @@ impl Bands {
         }
     }
 
+    /// The nodes the scatter of these bands can reach: from the window of the first band
+    /// with points to that of the last (every node on a periodic y axis, whose windows wrap).
+    pub fn node_span(&self, grid: &GridGeometry) -> Range<usize> {
+        if grid.periodic[1] {
+            return 0..grid.node_count();
+        }
+        let occupied = |b: &usize| self.start[*b] < self.start[*b + 1];
+        let mut with_points = (0..self.count()).filter(occupied);
+        let Some(first) = with_points.next() else {
+            return 0..0;
+        };
+        let last = with_points.next_back().unwrap_or(first);
+        let (low, high) = (
+            Bands::node_window(grid, first),
+            Bands::node_window(grid, last),
+        );
+        low.first as usize..(high.first + high.span) as usize
+    }
+
     /// The flat indices of the cells in band `b`'s rows.
     pub fn cells_of(grid: &GridGeometry, b: usize) -> Range<usize> {
         let per_row = grid.cells[0];

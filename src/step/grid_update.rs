@@ -30,16 +30,16 @@ pub fn update_grid(
         let field = &mut *field;
         let tol = field.mass_tolerance;
         // Node by node, independent: parallel and bitwise the same for any thread count.
-        field
-            .mass
+        // Nodes outside the active range are empty and at rest already.
+        let nodes = field.active();
+        field.mass[nodes.clone()]
             .par_iter()
-            .zip(field.momentum.par_iter_mut())
-            .zip(field.force.par_iter_mut())
+            .zip(field.momentum[nodes.clone()].par_iter_mut())
+            .zip(field.force[nodes.clone()].par_iter_mut())
             .zip(
-                field
-                    .acceleration
+                field.acceleration[nodes.clone()]
                     .par_iter_mut()
-                    .zip(field.velocity.par_iter_mut()),
+                    .zip(field.velocity[nodes].par_iter_mut()),
             )
             .for_each(|(((&m, mv), f), (a, v))| {
                 if m > tol {

@@ -38,6 +38,10 @@ pub struct Location {
 }
 
 impl Location {
+    /// Bytes per point besides the footprint ([`Footprint::BYTES`]): its cell and band
+    /// here, and its slot in the body's [`Bands`].
+    pub const BYTES_PER_POINT: usize = 4 + 4 + 4;
+
     /// Each point's footprint, built by this step's `locate_points`.
     pub fn footprints(&self) -> &[Footprint] {
         &self.footprint

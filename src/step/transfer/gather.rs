@@ -11,7 +11,7 @@ use crate::grid::{GridField, GridGeometry};
 use crate::step::locate::Location;
 
 use crate::resources::{Clock, VelocityRule};
-use crate::shape_functions::{Footprint, Scheme};
+use crate::shape_functions::{Footprint, Gathered, Scheme};
 
 /// A point's new velocity: its FLIP update `v + dt a_grid` pulled the fraction `pull` of the
 /// way to the grid's velocity `v_grid` at the point ([`crate::velocity::Transfer::pull`]): 0 is
@@ -69,8 +69,13 @@ pub fn grid_to_particle(mut bodies: VelocityUpdate) {
             .zip(points.advection.par_iter_mut())
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(((f, v), adv), l)| {
-                let (v_grid, grad) = f.interpolate_with_gradient(&field.velocity);
-                let a_grid = f.interpolate(&field.acceleration);
+                let g = f.gather::<false, true>(
+                    &field.velocity,
+                    &field.acceleration,
+                    &[0.0; 3],
+                    &[0.0; 3],
+                );
+                let (v_grid, grad, a_grid) = (g.value, g.gradient, g.acceleration);
                 *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
                 *l = grad;
@@ -90,13 +95,27 @@ pub fn apic_gather<S: Scheme>(
     x: DVec2,
     velocity: &[DVec2],
 ) -> (DVec2, DMat2, DMat2) {
+    let (g, c) = apic_sums::<S, false>(f, grid, x, velocity, &[]);
+    (g.value, g.gradient, c)
+}
+
+/// [`apic_gather`]'s sums and `C`, with `ACCELERATION` also the grid acceleration at the
+/// point, in the same pass over the nodes.
+#[inline(always)]
+fn apic_sums<S: Scheme, const ACCELERATION: bool>(
+    f: &Footprint,
+    grid: &GridGeometry,
+    x: DVec2,
+    velocity: &[DVec2],
+    acceleration: &[DVec2],
+) -> (Gathered, DMat2) {
     if S::AFFINE_IS_GRADIENT {
-        let (v, l) = f.interpolate_with_gradient(velocity);
-        return (v, l, l);
+        let g = f.gather::<false, ACCELERATION>(velocity, acceleration, &[0.0; 3], &[0.0; 3]);
+        return (g, g.gradient);
     }
     let (dx, dy) = f.offsets(grid, x);
-    let (v, l, b) = f.interpolate_affine(velocity, &dx, &dy);
-    (v, l, b * f.affine_inertia(&dx, &dy).inverse())
+    let g = f.gather::<true, ACCELERATION>(velocity, acceleration, &dx, &dy);
+    (g, g.affine_b * f.affine_inertia(&dx, &dy).inverse())
 }
 
 /// USL with an affine field (APIC, affine FLIP): the point's velocity update, its affine
@@ -117,6 +136,7 @@ pub(super) fn gather_affine<S: Scheme>(
     field: &GridField,
     update: Option<(f64, f64)>,
 ) {
+    let (velocity, acceleration) = (&field.velocity, &field.acceleration);
     location
         .footprints()
         .par_iter()
@@ -130,17 +150,24 @@ pub(super) fn gather_affine<S: Scheme>(
                 .zip(points.affine.par_iter_mut()),
         )
         .for_each(|((((f, &x), v), adv), (l, c))| {
-            let (v_grid, grad, affine) = apic_gather::<S>(f, grid, x, &field.velocity);
-            if let Some((dt, pull)) = update {
-                let a_grid = if pull == 1.0 {
-                    DVec2::ZERO
-                } else {
-                    f.interpolate(&field.acceleration)
-                };
-                *v = new_velocity(*v, v_grid, a_grid, dt, pull);
-                *adv = v_grid;
+            let (g, affine) = match update {
+                // Pulled all the way to the grid (APIC): the acceleration is not needed.
+                Some((dt, pull)) if pull != 1.0 => {
+                    let (g, affine) = apic_sums::<S, true>(f, grid, x, velocity, acceleration);
+                    *v = new_velocity(*v, g.value, g.acceleration, dt, pull);
+                    (g, affine)
+                }
+                Some(_) => {
+                    let (g, affine) = apic_sums::<S, false>(f, grid, x, velocity, &[]);
+                    *v = g.value;
+                    (g, affine)
+                }
+                None => apic_sums::<S, false>(f, grid, x, velocity, &[]),
+            };
+            if update.is_some() {
+                *adv = g.value;
             }
-            *l = grad;
+            *l = g.gradient;
             *c = affine;
         });
 }

@@ -25,10 +25,14 @@ pub fn musl_velocity(mut bodies: VelocityUpdate) {
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
             .for_each(|((f, v), adv)| {
-                let v_grid = f.interpolate(&field.velocity);
-                let a_grid = f.interpolate(&field.acceleration);
-                *v = new_velocity(*v, v_grid, a_grid, dt, pull);
-                *adv = v_grid;
+                let g = f.gather::<false, true>(
+                    &field.velocity,
+                    &field.acceleration,
+                    &[0.0; 3],
+                    &[0.0; 3],
+                );
+                *v = new_velocity(*v, g.value, g.acceleration, dt, pull);
+                *adv = g.value;
             });
     });
 }

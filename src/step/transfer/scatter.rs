@@ -56,6 +56,7 @@ fn scatter_body<const APIC: bool>(
     bands: &Bands,
     cells: Option<&CellDilatation>,
 ) {
+    field.will_write(bands.node_span(grid));
     let normals = !field.mass_gradient.is_empty();
     let nodes = grid.node_count();
     assert!(

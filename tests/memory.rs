@@ -1,0 +1,23 @@
+//! The state a point carries stays within the budget issue 22 set: no speed-up may buy its
+//! gain with more memory per point than the full model took before it (325 bytes: the point
+//! columns with the affine field, phase and rates, the footprint, cell, band and band slot;
+//! the paper's materials keep no further history).
+
+mod common;
+
+use regolith::Simulation;
+use regolith::run::memory_estimate;
+
+#[test]
+fn the_full_model_keeps_within_its_bytes_per_point() {
+    let scene = common::full_model_coarse();
+    let mut sim = Simulation::new(&scene);
+    let memory = memory_estimate(&mut sim, &scene);
+    assert_eq!(memory.points, sim.particle_count());
+    let per_point = memory.per_point();
+    assert!(
+        per_point <= 325.0,
+        "{per_point} bytes of state per point, above the budget of 325"
+    );
+    assert!(memory.grid_bytes > 0 && memory.total() > memory.point_bytes);
+}
