@@ -385,22 +385,25 @@ impl Footprint {
     /// `sum_i S_i u_i`.
     #[inline]
     pub fn interpolate(&self, u: &[DVec2]) -> DVec2 {
-        let mut out = DVec2::ZERO;
-        for ky in 0..3 {
-            let mut along = DVec2::ZERO;
-            for kx in 0..3 {
-                along += self.wx[kx] * u[self.node(kx, ky)];
-            }
-            out += self.wy[ky] * along;
-        }
-        out
+        self.gather_velocity::<false>(u, &[]).value
     }
 
     /// `sum_i S_i u_i` and `sum_i u_i (outer) grad S_i` in one pass over the nodes.
     #[inline]
     pub fn interpolate_with_gradient(&self, u: &[DVec2]) -> (DVec2, DMat2) {
-        let g = self.gather::<false, false>(u, &[], &[0.0; 3], &[0.0; 3]);
+        let g = self.gather_velocity::<false>(u, &[]);
         (g.value, g.gradient)
+    }
+
+    /// [`Footprint::gather`] without APIC's `B`: the velocity and its gradient, and with
+    /// `ACCELERATION` the acceleration.
+    #[inline(always)]
+    pub fn gather_velocity<const ACCELERATION: bool>(
+        &self,
+        velocity: &[DVec2],
+        acceleration: &[DVec2],
+    ) -> Gathered {
+        self.gather::<false, ACCELERATION>(velocity, acceleration, &[0.0; 3], &[0.0; 3])
     }
 }
 

@@ -69,12 +69,7 @@ pub fn grid_to_particle(mut bodies: VelocityUpdate) {
             .zip(points.advection.par_iter_mut())
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(((f, v), adv), l)| {
-                let g = f.gather::<false, true>(
-                    &field.velocity,
-                    &field.acceleration,
-                    &[0.0; 3],
-                    &[0.0; 3],
-                );
+                let g = f.gather_velocity::<true>(&field.velocity, &field.acceleration);
                 let (v_grid, grad, a_grid) = (g.value, g.gradient, g.acceleration);
                 *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
@@ -110,7 +105,7 @@ fn apic_sums<S: Scheme, const ACCELERATION: bool>(
     acceleration: &[DVec2],
 ) -> (Gathered, DMat2) {
     if S::AFFINE_IS_GRADIENT {
-        let g = f.gather::<false, ACCELERATION>(velocity, acceleration, &[0.0; 3], &[0.0; 3]);
+        let g = f.gather_velocity::<ACCELERATION>(velocity, acceleration);
         return (g, g.gradient);
     }
     let (dx, dy) = f.offsets(grid, x);

@@ -25,12 +25,7 @@ pub fn musl_velocity(mut bodies: VelocityUpdate) {
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
             .for_each(|((f, v), adv)| {
-                let g = f.gather::<false, true>(
-                    &field.velocity,
-                    &field.acceleration,
-                    &[0.0; 3],
-                    &[0.0; 3],
-                );
+                let g = f.gather_velocity::<true>(&field.velocity, &field.acceleration);
                 *v = new_velocity(*v, g.value, g.acceleration, dt, pull);
                 *adv = g.value;
             });
