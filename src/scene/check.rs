@@ -219,6 +219,14 @@ impl Scene {
                 "a periodic wall needs a periodic opposite wall".to_string(),
             );
         }
+        // The lock-free scatter's guarantee, checked for this grid before anything runs
+        // (every grid passes: a unit test runs the check for every row count up to 1000).
+        if let Err(why) = crate::step::BandLayout::of(&self.grid()).check() {
+            return err(
+                "cells",
+                format!("this grid cannot be scattered without a data race: {why}"),
+            );
+        }
         if !(self.flip.is_finite() && (0.0..=1.0).contains(&self.flip)) {
             return err(
                 "flip",

@@ -1,15 +1,30 @@
 //! Lock-free parallel scatter: points bucketed into bands of cell rows.
 //!
 //! A point's stencil reaches from one node row below its cell to two above (CPDI with
-//! `a <= h/2`; linear reaches less), so the scatters of two bands at least three cell rows
-//! apart touch disjoint node rows. Bands are `BAND_ROWS = 4` cell rows high: all even bands
-//! scatter in parallel, then all odd bands. No atomics, no locks; and because the band height
-//! does not depend on the thread count and each band visits its points in index order, every
-//! node receives its contributions in the same order whatever the number of threads (the
-//! determinism test hashes the state after N steps with 1 and 2 threads).
+//! `a <= h/2`; linear and the quadratic B-spline reach less), so the scatters of two bands
+//! at least three cell rows apart touch disjoint node rows. Bands are `BAND_ROWS = 4` cell
+//! rows high: all even bands scatter in parallel, then all odd bands. No atomics, no locks;
+//! and because the band height does not depend on the thread count and each band visits its
+//! points in index order, every node receives its contributions in the same order whatever
+//! the number of threads (tests/determinism.rs hashes the state at 1 to 4 threads).
 //!
-//! On a periodic y axis the first and last bands are neighbours; with an odd band count both
-//! are even, so the last band then scatters alone in a third phase.
+//! # Why no two bands of one phase can touch one node
+//! [`BandLayout`] cuts the rows and orders the phases; [`BandLayout::check`] proves the
+//! claim for one grid, and a unit test runs it for every row count up to 1000, walls
+//! periodic in y or not.
+//! * Along a bounded y axis the bands are `BAND_ROWS` rows high, the last one possibly
+//!   shorter. Two bands of one phase have a whole band of `BAND_ROWS >= 3` rows between
+//!   them, and the rows do not wrap.
+//! * Along a periodic y axis the last band is also a neighbour of the first. A short last
+//!   band would leave fewer than three rows between bands `n - 2` and `0`, both even when
+//!   `n` is even, and their windows would share the wrapped rows (a data race, issue 35).
+//!   So the last band takes the remainder instead (`BAND_ROWS` to `2 BAND_ROWS - 1` rows),
+//!   every band is at least `BAND_ROWS` high, and with an odd band count (first and last
+//!   both even) the last band scatters alone in a third phase.
+//!
+//! The scene check refuses a grid whose layout fails [`BandLayout::check`] (none does), and
+//! the scatter still checks every footprint against its band's [`NodeWindow`] before its
+//! unchecked writes: a stale cell or an oversized stencil is a panic, never a data race.
 
 use std::marker::PhantomData;
 use std::ops::Range;
@@ -27,9 +42,112 @@ pub const BAND_ROWS: usize = 4;
 /// the buckets come out the same whatever the number of threads.
 const BUCKET_CHUNK: usize = 4096;
 
+/// How a grid's cell rows are cut into bands and in which phases the bands scatter (module
+/// docs). A function of the grid alone, never of the points or the thread count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BandLayout {
+    /// Cell rows of the grid.
+    rows: usize,
+    /// Node rows of the grid (`rows` on a periodic y axis, else `rows + 1`).
+    node_rows: usize,
+    periodic: bool,
+    count: usize,
+}
+
+impl BandLayout {
+    pub fn of(grid: &GridGeometry) -> BandLayout {
+        let rows = grid.cells[1];
+        let periodic = grid.periodic[1];
+        let count = if periodic {
+            (rows / BAND_ROWS).max(1)
+        } else {
+            rows.div_ceil(BAND_ROWS)
+        };
+        BandLayout {
+            rows,
+            node_rows: grid.nodes_along(1),
+            periodic,
+            count,
+        }
+    }
+
+    /// Number of bands.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The band of cell row `j`.
+    #[inline]
+    pub fn band_of_row(&self, j: usize) -> u32 {
+        (j / BAND_ROWS).min(self.count.saturating_sub(1)) as u32
+    }
+
+    /// The cell rows of band `b`: `BAND_ROWS` of them, the last band the rest.
+    pub fn rows(&self, b: usize) -> Range<usize> {
+        let first = b * BAND_ROWS;
+        let last = if b + 1 >= self.count {
+            self.rows
+        } else {
+            first + BAND_ROWS
+        };
+        first.min(self.rows)..last
+    }
+
+    /// The node rows band `b` may scatter to: from one below its first cell row to two
+    /// above its last, as `(first, count)`, `first` wrapped onto the grid on a periodic
+    /// axis, `count` at most the grid's node rows.
+    fn node_rows(&self, b: usize) -> (usize, usize) {
+        let cells = self.rows(b);
+        if self.periodic {
+            let first = (cells.start + self.node_rows - 1) % self.node_rows;
+            (first, (cells.len() + 3).min(self.node_rows))
+        } else {
+            let first = cells.start.saturating_sub(1);
+            (first, (cells.end + 2).min(self.node_rows) - first)
+        }
+    }
+
+    /// Whether band `b` scatters alone after the two parallel phases: the last of an odd
+    /// number of bands on a periodic axis, a neighbour of band 0 of the same parity.
+    fn lone(&self, b: usize) -> bool {
+        self.periodic && self.count % 2 == 1 && self.count > 1 && b == self.count - 1
+    }
+
+    /// The phase band `b` scatters in: 0 (even bands), 1 (odd bands) or 2 (the lone last
+    /// band, see [`BandLayout::lone`]).
+    pub fn phase(&self, b: usize) -> usize {
+        if self.lone(b) { 2 } else { b % 2 }
+    }
+
+    /// Checks what the lock-free scatter relies on: no two bands of one phase share a node
+    /// row of their windows (the rows their points' stencils can reach). `Err` names the
+    /// first pair that would race.
+    pub fn check(&self) -> Result<(), String> {
+        let mut owner: Vec<Vec<Option<usize>>> = vec![vec![None; self.node_rows]; 3];
+        for b in 0..self.count {
+            let (first, count) = self.node_rows(b);
+            let phase = &mut owner[self.phase(b)];
+            for k in 0..count {
+                let row = (first + k) % self.node_rows;
+                if let Some(other) = phase[row].replace(b) {
+                    return Err(format!(
+                        "bands {other} and {b} scatter in the same phase and both reach node row {row} \
+                         ({} cell rows, y {})",
+                        self.rows,
+                        if self.periodic { "periodic" } else { "bounded" }
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The points of one body bucketed by band (a counting sort, rebuilt whenever they move).
 #[derive(Component, Clone, Debug, Default)]
 pub struct Bands {
+    /// The grid's bands, as of the last rebuild.
+    layout: BandLayout,
     /// `start[b]..start[b + 1]` indexes `points` for band `b`.
     start: Vec<usize>,
     /// Point indices, ascending within each band.
@@ -40,14 +158,16 @@ pub struct Bands {
 }
 
 impl Bands {
-    /// Buckets the points by band, given each point's band; no allocation once the buffers
-    /// have grown. A parallel counting sort over fixed chunks of points: each chunk counts
-    /// its points per band, a short serial pass turns the counts into each chunk's first
-    /// slot in each band (bands in order, chunks in order within a band), and each chunk
-    /// then places its points. Within a band the points come out in ascending index order,
-    /// as a serial counting sort would place them.
-    pub fn rebuild(&mut self, grid: &GridGeometry, band_of: &[u32]) {
-        let count = grid.cells[1].div_ceil(BAND_ROWS);
+    /// Buckets the points by band, given each point's band (`BandLayout::band_of_row` of
+    /// its cell row); no allocation once the buffers have grown. A parallel counting sort
+    /// over fixed chunks of points: each chunk counts its points per band, a short serial
+    /// pass turns the counts into each chunk's first slot in each band (bands in order,
+    /// chunks in order within a band), and each chunk then places its points. Within a band
+    /// the points come out in ascending index order, as a serial counting sort would place
+    /// them.
+    pub fn rebuild(&mut self, layout: BandLayout, band_of: &[u32]) {
+        self.layout = layout;
+        let count = layout.count();
         let chunks = band_of.len().div_ceil(BUCKET_CHUNK);
         self.slots.clear();
         self.slots.resize(chunks * count, 0);
@@ -81,8 +201,10 @@ impl Bands {
             .for_each(|(c, (slot, bands))| {
                 for (k, &b) in bands.iter().enumerate() {
                     let s = &mut slot[b as usize];
-                    // SAFETY: each (chunk, band) pair owns the slots from its first slot up
-                    // to the next pair's, and `*s` stays below `band_of.len()`.
+                    // SAFETY: the serial pass gave each (chunk, band) pair the slots from
+                    // its first up to the next pair's first, as many as the chunk has points
+                    // in the band; only this chunk's task writes them, and `*s` stays below
+                    // `start[count] = band_of.len()`, the length of `points`.
                     unsafe { placed.set_at(*s, (c * BUCKET_CHUNK + k) as u32) };
                     *s += 1;
                 }
@@ -93,26 +215,21 @@ impl Bands {
         self.start.len().saturating_sub(1)
     }
 
+    /// The grid's bands, as of the last rebuild.
+    pub fn layout(&self) -> &BandLayout {
+        &self.layout
+    }
+
     /// The nodes band `b` may scatter to on `grid` (module docs).
-    pub fn node_window(grid: &GridGeometry, b: usize) -> NodeWindow {
+    pub fn node_window(&self, grid: &GridGeometry, b: usize) -> NodeWindow {
         let row = grid.nodes_along(0) as u32;
-        let rows = grid.nodes_along(1) as i64;
-        let periodic = grid.periodic[1];
-        let mut first = (b * BAND_ROWS) as i64 - 1;
-        let mut last = ((b + 1) * BAND_ROWS + 2) as i64; // one past
-        if periodic {
-            first = first.rem_euclid(rows);
-            last = first + (BAND_ROWS as i64 + 3).min(rows);
-        } else {
-            first = first.max(0);
-            last = last.min(rows);
-        }
+        let (first, rows) = self.layout.node_rows(b);
         NodeWindow {
             first: first as u32 * row,
-            span: (last - first) as u32 * row,
-            total: rows as u32 * row,
+            span: rows as u32 * row,
+            total: grid.node_count() as u32,
             row,
-            periodic,
+            periodic: self.layout.periodic,
         }
     }
 
@@ -128,19 +245,15 @@ impl Bands {
             return 0..0;
         };
         let last = with_points.next_back().unwrap_or(first);
-        let (low, high) = (
-            Bands::node_window(grid, first),
-            Bands::node_window(grid, last),
-        );
+        let (low, high) = (self.node_window(grid, first), self.node_window(grid, last));
         low.first as usize..(high.first + high.span) as usize
     }
 
     /// The flat indices of the cells in band `b`'s rows.
-    pub fn cells_of(grid: &GridGeometry, b: usize) -> Range<usize> {
+    pub fn cells_of(&self, grid: &GridGeometry, b: usize) -> Range<usize> {
         let per_row = grid.cells[0];
-        let first = b * BAND_ROWS;
-        let last = ((b + 1) * BAND_ROWS).min(grid.cells[1]);
-        first * per_row..last.max(first) * per_row
+        let rows = self.layout.rows(b);
+        rows.start * per_row..rows.end * per_row
     }
 
     /// The indices of the points in band `b`.
@@ -149,19 +262,14 @@ impl Bands {
     }
 
     /// Runs `scatter(b)` for every band, phase by phase, so that bands running at the same
-    /// time never touch the same node row (see the module docs).
-    pub fn for_each_phase(&self, periodic_y: bool, scatter: impl Fn(usize) + Sync) {
-        let n = self.count();
-        let lone_last = periodic_y && n % 2 == 1 && n > 1;
-        let parallel_end = if lone_last { n - 1 } else { n };
-        for parity in [0, 1] {
-            (parity..parallel_end)
+    /// time never touch the same node row (see the module docs and [`BandLayout::check`]).
+    pub fn for_each_phase(&self, scatter: impl Fn(usize) + Sync) {
+        let layout = &self.layout;
+        for phase in 0..3 {
+            (0..self.count())
                 .into_par_iter()
-                .step_by(2)
+                .filter(|&b| layout.phase(b) == phase)
                 .for_each(&scatter);
-        }
-        if lone_last {
-            scatter(n - 1);
         }
     }
 
@@ -261,22 +369,82 @@ impl NodeWindow {
 mod tests {
     use glam::DVec2;
 
-    use super::{BUCKET_CHUNK, Bands};
+    use super::{BAND_ROWS, BUCKET_CHUNK, BandLayout, Bands};
     use crate::grid::GridGeometry;
+
+    fn grid(rows: usize, periodic: bool) -> GridGeometry {
+        GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [3, rows],
+            periodic: [false, periodic],
+        }
+    }
+
+    /// For every row count up to 1000, bounded or periodic in y: the bands tile the rows,
+    /// each cell row's stencil (node rows `j - 1` to `j + 2`) lies in its band's window, and
+    /// no two bands of one phase share a node row.
+    #[test]
+    fn every_layout_is_free_of_races() {
+        for periodic in [false, true] {
+            for rows in 1..=1000 {
+                let layout = BandLayout::of(&grid(rows, periodic));
+                let at = format!("{rows} rows, periodic {periodic}");
+                layout.check().unwrap_or_else(|e| panic!("{at}: {e}"));
+                let nodes = grid(rows, periodic).nodes_along(1) as i64;
+                let mut next = 0;
+                for b in 0..layout.count() {
+                    let cells = layout.rows(b);
+                    assert_eq!(cells.start, next, "{at}: band {b} does not follow on");
+                    assert!(!cells.is_empty(), "{at}: band {b} is empty");
+                    next = cells.end;
+                    let (first, span) = layout.node_rows(b);
+                    for j in cells {
+                        assert_eq!(layout.band_of_row(j), b as u32, "{at}: row {j}");
+                        for r in j as i64 - 1..=j as i64 + 2 {
+                            let r = if periodic {
+                                r.rem_euclid(nodes)
+                            } else if (0..nodes).contains(&r) {
+                                r
+                            } else {
+                                continue;
+                            };
+                            let d = (r - first as i64).rem_euclid(nodes);
+                            assert!(d < span as i64, "{at}: row {j} reaches node row {r}");
+                        }
+                    }
+                }
+                assert_eq!(next, rows, "{at}: the bands do not cover the rows");
+            }
+        }
+    }
+
+    /// The layout before issue 35 cut a periodic axis into `ceil(rows / BAND_ROWS)` bands,
+    /// the last one short: with 54 rows bands 0 and 12 ran in one phase and both reached
+    /// the wrapped node row 53. The check finds it.
+    #[test]
+    fn the_check_finds_the_old_periodic_race() {
+        let fixed = BandLayout::of(&grid(54, true));
+        assert_eq!(fixed.count(), 13);
+        let old = BandLayout {
+            count: 54usize.div_ceil(BAND_ROWS),
+            ..fixed
+        };
+        let err = old.check().expect_err("the old layout races");
+        assert!(
+            err.contains("bands 0 and 12") && err.contains("row 53"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn parallel_bucketing_matches_a_serial_counting_sort() {
-        let grid = GridGeometry {
-            origin: DVec2::ZERO,
-            cell_size: 1.0,
-            cells: [10, 37],
-            periodic: [false, false],
-        };
+        let grid = grid(37, false);
         // Several chunks, the last one partial, bands in a scrambled order.
         let n = 3 * BUCKET_CHUNK + 123;
         let band_of: Vec<u32> = (0..n).map(|p| ((p * 7919 + p / 5) % 10) as u32).collect();
         let mut bands = Bands::default();
-        bands.rebuild(&grid, &band_of);
+        bands.rebuild(BandLayout::of(&grid), &band_of);
         assert_eq!(bands.count(), 10);
         for b in 0..bands.count() {
             let expected: Vec<u32> = (0..n as u32)

@@ -61,7 +61,7 @@ impl CellDilatation {
         let weighted = Shared::new(&mut self.weighted);
         bands.for_each(|b| {
             let (volume, weighted) = (volume, weighted); // see `particle_to_grid`
-            let own = Bands::cells_of(grid, b);
+            let own = bands.cells_of(grid, b);
             for &k in bands.points(b) {
                 let k = k as usize;
                 let c = cell[k] as usize;
@@ -69,8 +69,11 @@ impl CellDilatation {
                     own.contains(&c),
                     "point {k}'s cell {c} is not in its band {b}: cells and bands disagree"
                 );
-                // SAFETY: `c` is one of band b's own cells (checked above), which are in
-                // bounds and which no other band sums into.
+                // SAFETY: `c` is one of band b's own cells (checked above). A band's cells are
+                // the cells of its rows, inside the grid's `cells` (asserted above to be the
+                // length of both sums), and the bands tile the rows without overlap
+                // (`BandLayout::rows`, tested for every row count), so no other band running
+                // now sums into `c`.
                 unsafe {
                     volume.add_at(c, points.volume[k]);
                     weighted.add_at(c, value(k));

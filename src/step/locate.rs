@@ -17,7 +17,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::bands::{BAND_ROWS, Bands};
+use super::bands::{BandLayout, Bands};
 use crate::body::Points;
 use crate::grid::GridGeometry;
 use crate::shape_functions::{Footprint, Scheme};
@@ -55,6 +55,7 @@ impl Location {
     /// Finds the cells of `positions` and rebuckets `bands` by them.
     fn find_cells(&mut self, grid: &GridGeometry, positions: &[DVec2], bands: &mut Bands) {
         let inv_h = 1.0 / grid.cell_size;
+        let layout = BandLayout::of(grid);
         self.cell.resize(positions.len(), 0);
         self.band.resize(positions.len(), 0);
         self.cell
@@ -64,9 +65,9 @@ impl Location {
             .for_each(|((c, b), x)| {
                 let [i, j] = grid.cell_at(*x, inv_h);
                 *c = (j * grid.cells[0] + i) as u32;
-                *b = (j / BAND_ROWS) as u32;
+                *b = layout.band_of_row(j);
             });
-        bands.rebuild(grid, &self.band);
+        bands.rebuild(layout, &self.band);
     }
 
     /// Finds the cells after the points moved; the next step's `locate_points` reuses them

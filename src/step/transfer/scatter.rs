@@ -70,11 +70,11 @@ fn scatter_body<const APIC: bool>(
     let momentum = Shared::new(&mut field.momentum);
     let force = Shared::new(&mut field.force);
     let gradient = Shared::new(&mut field.mass_gradient);
-    bands.for_each_phase(grid.periodic[1], |b| {
+    bands.for_each_phase(|b| {
         // Local copies: the stores below could otherwise alias the captured pointers,
         // which the compiler then reloads for every entry.
         let (mass, momentum, force, gradient) = (mass, momentum, force, gradient);
-        let window = Bands::node_window(grid, b);
+        let window = bands.node_window(grid, b);
         for &p in bands.points(b) {
             let p = p as usize;
             let f = &location.footprints()[p];
@@ -97,8 +97,10 @@ fn scatter_body<const APIC: bool>(
             // V T . grad S for grad S = (gx wy, wx gy): the stress columns scaled.
             let (tx, ty) = (vol * t.traction(DVec2::X), vol * t.traction(DVec2::Y));
             f.for_each_indexed(|kx, ky, n, w, grad| {
-                // SAFETY: the footprint lies in the band's window (checked above), inside
-                // the field, and bands scattering at the same time have disjoint windows.
+                // SAFETY: the footprint lies in the band's window (checked above), which lies
+                // inside the field (the four slices have `nodes` entries, asserted above), and
+                // bands scattering in one phase have disjoint windows (`BandLayout::check`,
+                // which the scene check runs and a unit test runs for every row count).
                 unsafe {
                     mass.add_at(n, w * m);
                     momentum.add_at(n, w * momentum_at.at(kx, ky));
