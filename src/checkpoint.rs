@@ -2,25 +2,27 @@
 //! run is bitwise identical to an uninterrupted one.
 //!
 //! What a step reads from the previous one: the clock, every body's points, point states and
-//! material history, the energy bound, and (for outputs) the trajectory rows and each output
-//! plugin's schedule, and the instant of an impact's first contact. Grid fields, cell sums and whole-body measures are recomputed from the
-//! points, so they are not saved. The file is bincode (f64 as raw bits), written atomically;
-//! the scene itself is the run directory's `scene.ron`.
+//! material history, the energy bound; and for the outputs the trajectory rows, the output
+//! clock, and whatever each output and condition carries (`crate::carry`: its records, its
+//! schedule, the instant of an impact's first contact, the frames a collection lists). Grid
+//! fields, cell sums and whole-body measures are recomputed from the points, so they are not
+//! saved. The file is bincode (f64 as raw bits), written atomically; the scene itself is the
+//! run directory's `scene.ron`.
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, PointStates, Points};
+use crate::carry::{Carried, Partial};
 use crate::diagnostics::EnergyLimit;
-use crate::output::impact::{ContactInstant, ImpactWatch};
 use crate::output::write_atomic;
 use crate::resources::{Clock, OutputClock, StepRule};
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 4;
+const FORMAT: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -33,9 +35,32 @@ pub struct Checkpoint {
     output_clock: OutputClock,
     energy_bound: Option<f64>,
     trajectory: Vec<Vec<f64>>,
-    /// The `Impact` output's first contact, and its last state before contact.
-    impact: Option<(Option<ContactInstant>, Option<ContactInstant>)>,
+    /// What each output and condition carries, in scene order.
+    items: Vec<ItemCheckpoint>,
+    /// Why the run so far is partial (from earlier resumes).
+    partial: Partial,
     bodies: Vec<BodyCheckpoint>,
+}
+
+/// One output's or condition's carried state, keyed by its place and name in the scene.
+#[derive(Serialize, Deserialize)]
+struct ItemCheckpoint {
+    /// `output` or `condition`.
+    kind: String,
+    index: usize,
+    name: String,
+    carried: Carried,
+}
+
+impl ItemCheckpoint {
+    fn of(kind: &str, index: usize, name: &str, carried: Carried) -> ItemCheckpoint {
+        ItemCheckpoint {
+            kind: kind.to_string(),
+            index,
+            name: name.to_string(),
+            carried,
+        }
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -73,6 +98,14 @@ impl Checkpoint {
                 states,
             })
             .collect();
+        let world = &sim.world;
+        let outputs = scene.outputs.iter().enumerate();
+        let outputs =
+            outputs.map(|(k, o)| ItemCheckpoint::of("output", k, o.name(), o.save(world)));
+        let conditions = scene.conditions.iter().enumerate();
+        let conditions =
+            conditions.map(|(k, c)| ItemCheckpoint::of("condition", k, c.name(), c.save(world)));
+        let items = outputs.chain(conditions).collect();
         Checkpoint {
             format: FORMAT,
             scene_file: scene_file.to_string(),
@@ -82,10 +115,8 @@ impl Checkpoint {
             output_clock: sim.world.resource::<OutputClock>().clone(),
             energy_bound: sim.world.resource::<EnergyLimit>().bound,
             trajectory: sim.trajectory().rows.clone(),
-            impact: sim
-                .world
-                .get_resource::<ImpactWatch>()
-                .map(|w| (w.contact, w.before)),
+            items,
+            partial: world.get_resource::<Partial>().cloned().unwrap_or_default(),
             bodies,
         }
     }
@@ -112,7 +143,9 @@ impl Checkpoint {
         Ok(c)
     }
 
-    /// Puts the saved state into `sim`, a fresh simulation of the same scene.
+    /// Puts the saved state into `sim`, a fresh simulation of the same scene made by
+    /// [`Simulation::unobserved`] (so that no output has recorded or opened a file for the
+    /// initial state the checkpoint replaces).
     pub fn restore(self, sim: &mut Simulation, scene: &Scene) -> Result<(), String> {
         let mut q = sim.world.query::<(bevy_ecs::entity::Entity, &Body)>();
         let entities: Vec<_> = q
@@ -149,17 +182,82 @@ impl Checkpoint {
         *sim.world.resource_mut::<OutputClock>() = self.output_clock;
         sim.world.resource_mut::<EnergyLimit>().bound = self.energy_bound;
         sim.trajectory_mut().rows = self.trajectory;
-        for output in &scene.outputs {
-            output.resume(&mut sim.world, time);
+        let mut partial = self.partial.0;
+        for (k, output) in scene.outputs.iter().enumerate() {
+            let saved = find(&self.items, "output", k, output.name());
+            let restore = |state: &[u8]| output.restore(&mut sim.world, state);
+            carry_over(
+                saved,
+                ("output", output.name()),
+                time,
+                restore,
+                &mut partial,
+            )?;
         }
-        for condition in &scene.conditions {
-            condition.resume(&mut sim.world, time);
+        for (k, condition) in scene.conditions.iter().enumerate() {
+            let saved = find(&self.items, "condition", k, condition.name());
+            let restore = |state: &[u8]| condition.restore(&mut sim.world, state);
+            carry_over(
+                saved,
+                ("condition", condition.name()),
+                time,
+                restore,
+                &mut partial,
+            )?;
         }
-        if let (Some(mut watch), Some((contact, before))) =
-            (sim.world.get_resource_mut::<ImpactWatch>(), self.impact)
-        {
-            (watch.contact, watch.before) = (contact, before);
+        // An item of the interrupted run that the resumed scene lacks (a recording not asked
+        // for again) stops at the checkpoint.
+        for item in &self.items {
+            let list: Vec<&str> = match item.kind.as_str() {
+                "output" => scene.outputs.iter().map(|o| o.name()).collect(),
+                _ => scene.conditions.iter().map(|c| c.name()).collect(),
+            };
+            if list.get(item.index) != Some(&item.name.as_str()) {
+                partial.push(format!(
+                    "the {} {} of the interrupted run was not asked for again: its record ends at t = {time} s",
+                    item.name, item.kind
+                ));
+            }
+        }
+        if !partial.is_empty() {
+            sim.world.insert_resource(Partial(partial));
         }
         Ok(())
     }
+}
+
+/// The saved state of the `index`-th item of `kind` if it is called `name`.
+fn find<'a>(
+    items: &'a [ItemCheckpoint],
+    kind: &str,
+    index: usize,
+    name: &str,
+) -> Option<&'a Carried> {
+    items
+        .iter()
+        .find(|i| i.kind == kind && i.index == index && i.name == name)
+        .map(|i| &i.carried)
+}
+
+/// Restores one item from what the checkpoint holds of it, or records why its results are
+/// partial: it could not carry its state, or it was not in the run that was interrupted (an
+/// output added at the resume, such as a recording).
+fn carry_over(
+    saved: Option<&Carried>,
+    (kind, name): (&str, &str),
+    time: f64,
+    restore: impl FnOnce(&[u8]) -> Result<(), String>,
+    partial: &mut Vec<String>,
+) -> Result<(), String> {
+    match saved {
+        None => partial.push(format!(
+            "the {name} {kind} was added when the run resumed at t = {time} s: it holds only what came after"
+        )),
+        Some(Carried::Nothing) => {}
+        Some(Carried::State(state)) => {
+            restore(state).map_err(|e| format!("the checkpoint's {name} {kind}: {e}"))?
+        }
+        Some(Carried::Lost(why)) => partial.push(format!("{why} (at t = {time} s)")),
+    }
+    Ok(())
 }

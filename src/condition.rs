@@ -10,6 +10,7 @@
 
 use bevy_ecs::prelude::*;
 
+use crate::carry::Carried;
 use crate::output::summary::Section;
 use crate::plugin::Install;
 use crate::registry::DynItem;
@@ -29,8 +30,22 @@ pub trait Condition: DynItem {
     fn summary(&self, _world: &World) -> Section {
         Section::default()
     }
-    /// Re-aligns the condition with a run resumed at `time`; by default nothing.
-    fn resume(&self, _world: &mut World, _time: f64) {}
+    /// What the condition carries across a checkpoint (`crate::carry`), as
+    /// [`Output::save`](crate::output::Output::save): by default it says it cannot, and a
+    /// resumed run is marked partial.
+    fn save(&self, _world: &World) -> Carried {
+        Carried::Lost(format!(
+            "the {} condition does not save its state in checkpoints: it restarted at the resume",
+            self.name()
+        ))
+    }
+    /// Puts back the state `save` returned, before the first resumed step.
+    fn restore(&self, _world: &mut World, _state: &[u8]) -> Result<(), String> {
+        Err(format!(
+            "the {} condition cannot restore a state",
+            self.name()
+        ))
+    }
 }
 
 crate::item_kind!(Condition, "condition");

@@ -9,6 +9,7 @@
 //! See ARCHITECTURE.md for the layout and docs/scenes.md for the scene format.
 
 pub mod body;
+pub mod carry;
 pub mod checkpoint;
 pub mod condition;
 pub mod contact;

@@ -13,6 +13,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use crate::carry::Partial;
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
@@ -33,6 +34,12 @@ pub struct Provenance<'a> {
 /// Something told about each step (the command line draws a progress bar with it).
 pub trait Progress: Send {
     fn step(&mut self, clock: &Clock);
+    /// Whether the run should stop after this step as a signal would stop it (checkpoint,
+    /// `interrupted` summary): a driver's own way to interrupt a run, as the resume tests
+    /// do. By default never; [`request_stop`] stops every run in the process.
+    fn stop(&mut self, _clock: &Clock) -> bool {
+        false
+    }
 }
 
 impl<F: FnMut(&Clock) + Send> Progress for F {
@@ -85,7 +92,7 @@ pub fn resume_run(
     let checkpoint = Checkpoint::read(&out.join("checkpoint.bin"))
         .map_err(|e| Error::Scene(SceneError::file(&out.display().to_string(), e)))?;
     let (file, overrides) = (checkpoint.scene_file.clone(), checkpoint.overrides.clone());
-    let mut sim = Simulation::new(&scene);
+    let mut sim = Simulation::unobserved(&scene);
     checkpoint
         .restore(&mut sim, &scene)
         .map_err(|e| Error::Scene(SceneError::file(&out.display().to_string(), e)))?;
@@ -139,7 +146,7 @@ fn run_to_end(
             if sim.finished() {
                 break;
             }
-            let stop = STOP.load(Ordering::SeqCst);
+            let stop = STOP.load(Ordering::SeqCst) || progress.stop(sim.clock());
             let due = checkpoints
                 .0
                 .is_some_and(|every| sim.clock().step.is_multiple_of(every));
@@ -232,6 +239,11 @@ pub fn summarize(
         units.extend(section.units);
         headlines.extend(section.headline);
     }
+    let partial_because = sim
+        .world
+        .get_resource::<Partial>()
+        .map_or(Vec::new(), |p| p.0.clone());
+    headlines.extend(partial_because.iter().map(|why| format!("PARTIAL: {why}")));
     Summary {
         sections,
         headlines,
@@ -241,6 +253,8 @@ pub fn summarize(
         overrides: from.overrides.to_vec(),
         status: status.to_string(),
         failure,
+        partial: !partial_because.is_empty(),
+        partial_because,
         integration: format!("{:?}", scene.integration),
         steps: clock.step,
         time: clock.time,

@@ -85,12 +85,34 @@ impl Simulation {
     /// Builds the world and schedule of a checked scene and observes the t = 0 state,
     /// keeping every output in memory only.
     pub fn new(scene: &Scene) -> Simulation {
-        Simulation::build(scene, None).expect("no files are written without a directory")
+        let mut sim =
+            Simulation::build(scene, None).expect("no files are written without a directory");
+        sim.observe();
+        sim
     }
 
     /// As [`Simulation::new`], also writing outputs into `dir` (which must exist).
     pub fn with_output(scene: &Scene, dir: &std::path::Path) -> std::io::Result<Simulation> {
-        Simulation::build(scene, Some(dir))
+        let mut sim = Simulation::build(scene, Some(dir))?;
+        sim.observe();
+        Ok(sim)
+    }
+
+    /// The simulation of `scene` before its t = 0 outputs: what a checkpoint restores into
+    /// ([`crate::checkpoint::Checkpoint::restore`]). Observing t = 0 would have the outputs
+    /// record, and open their files for, a state that the checkpoint then replaces (the
+    /// Rerun recorder would start its file afresh).
+    pub fn unobserved(scene: &Scene) -> Simulation {
+        let mut sim =
+            Simulation::build(scene, None).expect("no files are written without a directory");
+        sim.world.resource_mut::<Clock>().observing = false;
+        sim
+    }
+
+    /// Diagnostics and Output on the t = 0 state, without a step.
+    fn observe(&mut self) {
+        self.schedule.run(&mut self.world);
+        self.world.resource_mut::<Clock>().observing = false;
     }
 
     fn build(scene: &Scene, dir: Option<&std::path::Path>) -> std::io::Result<Simulation> {
@@ -207,11 +229,7 @@ impl Simulation {
         }
         world.insert_resource(trajectory);
         world.insert_resource(RunDir(dir.map(|d| d.to_path_buf())));
-        let mut sim = Simulation { world, schedule };
-        // Diagnostics and Output on the t = 0 state, without a step.
-        sim.schedule.run(&mut sim.world);
-        sim.world.resource_mut::<Clock>().observing = false;
-        Ok(sim)
+        Ok(Simulation { world, schedule })
     }
 
     /// Sends outputs to `dir` from now on (for a resumed run): the trajectory so far is

@@ -71,7 +71,7 @@ fn a_resumed_run_is_bitwise_identical() {
         .unwrap();
     drop(first);
 
-    let mut resumed = Simulation::new(&scene);
+    let mut resumed = Simulation::unobserved(&scene);
     Checkpoint::read(&path)
         .unwrap()
         .restore(&mut resumed, &scene)
@@ -95,7 +95,7 @@ fn a_checkpoint_of_another_scene_is_refused() {
         .write(&path)
         .unwrap();
     let other = common::scene("elastic_bar_vibration", &[]);
-    let mut wrong = Simulation::new(&other);
+    let mut wrong = Simulation::unobserved(&other);
     assert!(
         Checkpoint::read(&path)
             .unwrap()
@@ -105,4 +105,130 @@ fn a_checkpoint_of_another_scene_is_refused() {
     std::fs::write(&path, b"garbage").unwrap();
     let err = Checkpoint::read(&path).err().expect("garbage is refused");
     assert!(err.contains("not a regolith checkpoint"), "{err}");
+}
+
+/// A plugin's output that counts its records and does not say how to carry them.
+#[derive(Clone, Debug, serde::Deserialize)]
+struct Tally {}
+
+#[derive(regolith::bevy_ecs::prelude::Resource, Default)]
+struct Count(u64);
+
+fn count(mut c: regolith::bevy_ecs::prelude::ResMut<Count>) {
+    c.0 += 1;
+}
+
+impl regolith::registry::Item for Tally {
+    const NAME: &'static str = "Tally";
+}
+
+impl regolith::output::Output for Tally {
+    fn install(&self, sim: &mut regolith::plugin::Install) {
+        sim.insert_resource(Count::default());
+        sim.add_systems(regolith::step::StepSet::Output, count);
+    }
+}
+
+struct TallyPlugin;
+
+impl regolith::Plugin for TallyPlugin {
+    fn build(&self, app: &mut regolith::Regolith) {
+        app.register::<dyn regolith::output::Output, Tally>();
+    }
+}
+
+/// Stops a run after step `at`, as a signal would.
+struct StopAt(u64);
+
+impl regolith::run::Progress for StopAt {
+    fn step(&mut self, _clock: &regolith::sim::Clock) {}
+    fn stop(&mut self, clock: &regolith::sim::Clock) -> bool {
+        clock.step == self.0
+    }
+}
+
+/// Nothing silent (issue 35): an output that cannot carry its state over a resume, and one
+/// first asked for at the resume, make the resumed run's summary say it is partial and why;
+/// a run never interrupted is not.
+#[test]
+fn a_resume_past_an_output_without_state_is_marked_partial() {
+    use regolith::run::{CheckpointEvery, Provenance, resume_run, run_scene};
+    let registries = regolith::Regolith::default()
+        .add_plugin(TallyPlugin)
+        .registries();
+    let text = r#"(
+        name: "tally",
+        domain: (size: (0.1, 0.1), cells: (10, 10)),
+        time: (end: 2e-4, step: Fixed(2e-5), output_every: 1e-4),
+        walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),
+        bodies: [(name: "block", shape: Rectangle(min: (0.02, 0.02), max: (0.08, 0.08)),
+                  material: LinearElastic(density: 1000.0, youngs_modulus: 1e6, poisson_ratio: 0.3))],
+        outputs: [Tally()],
+    )"#;
+    let scene = Scene::parse(text, "tally.ron", &registries).unwrap();
+    let from = Provenance {
+        file: "tally.ron",
+        text,
+        overrides: &[],
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let summary = |d: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap()).unwrap()
+    };
+    let straight = dir.path().join("straight");
+    run_scene(
+        &scene,
+        &from,
+        &straight,
+        CheckpointEvery(None),
+        &mut |_: &regolith::sim::Clock| {},
+    )
+    .unwrap();
+    assert_eq!(summary(&straight)["partial"], false);
+
+    let cut = dir.path().join("cut");
+    let stopped = run_scene(&scene, &from, &cut, CheckpointEvery(None), &mut StopAt(4));
+    assert!(matches!(
+        stopped,
+        Err(regolith::error::Error::Interrupted { .. })
+    ));
+    let added = |scene: &mut Scene| {
+        let more = Scene::parse(
+            &text.replace(
+                "outputs: [Tally()]",
+                "outputs: [Tally(), Snapshots(every: 1e-4)]",
+            ),
+            "tally.ron",
+            &registries,
+        )?;
+        scene.outputs = more.outputs;
+        Ok(())
+    };
+    let mut quiet = |_: &regolith::sim::Clock| {};
+    let resumed = resume_run(&registries, &cut, CheckpointEvery(None), added, &mut quiet).unwrap();
+    let s = summary(&cut);
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["partial"], true);
+    let why = s["partial_because"].as_array().unwrap();
+    assert_eq!(why.len(), 2, "{why:?}");
+    assert!(
+        why[0]
+            .as_str()
+            .unwrap()
+            .contains("the Tally output does not save its state"),
+        "{why:?}"
+    );
+    assert!(
+        why[1]
+            .as_str()
+            .unwrap()
+            .contains("the Snapshots output was added when the run resumed"),
+        "{why:?}"
+    );
+    assert!(
+        resumed
+            .headlines
+            .iter()
+            .any(|h| h.starts_with("PARTIAL: the Tally output"))
+    );
 }

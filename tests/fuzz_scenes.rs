@@ -96,10 +96,11 @@ fn choose<'a>(valid: &[&'a str], invalid: &[&'a str], k: usize) -> &'a str {
     }
 }
 
-/// A small scene (a granular or elastic bed and a disc, 8 x 8 cells) assembled from items
-/// chosen by `k`: walls, schemes, transfer, contact law, materials, outputs (some listed
-/// twice or naming a missing body), a preset, and `--set` overrides, each now and then an
-/// invalid one. Only a few steps long, so that running it is cheap.
+/// A small scene (a granular or elastic bed and a disc, 4 to 16 by 4 to 40 cells) assembled
+/// from items chosen by `k`: walls (periodic in x, in y, in both), cell counts, schemes,
+/// transfer, contact law, materials, outputs (some listed twice or naming a missing body), a
+/// preset, and `--set` overrides, each now and then an invalid one. Only a few steps long,
+/// so that running it is cheap.
 fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     const SIDE: [&str; 4] = ["Free", "Open", "Slip", "NoSlip"];
     let (left, right) = if k[0] % 8 == 7 {
@@ -109,11 +110,19 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     } else {
         (pick(&SIDE, k[1]), pick(&SIDE, k[1] / 4))
     };
-    let walls = format!(
-        "(left: {left}, right: {right}, bottom: {}, top: {})",
-        pick(&SIDE, k[2]),
-        pick(&SIDE, k[3])
-    );
+    let (bottom, top) = if k[22] % 8 == 7 {
+        ("Periodic", pick(&SIDE, k[3]))
+    } else if k[22] % 3 == 0 {
+        ("Periodic", "Periodic")
+    } else {
+        (pick(&SIDE, k[2]), pick(&SIDE, k[3]))
+    };
+    let walls = format!("(left: {left}, right: {right}, bottom: {bottom}, top: {top})");
+    // Square cells of 25 mm, 4 to 16 across and 4 to 40 high; the bed fills the lower half,
+    // the disc sits above it.
+    let (nx, ny) = (4 + k[23] % 13, 4 + k[24] % 37);
+    let (w, h) = (0.025 * nx as f64, 0.025 * ny as f64);
+    let radius = 0.2 * w.min(h);
     let integration = pick(&["CpdiFixed", "Linear", "QuadraticBspline"], k[4]);
     let update = pick(&["Usl", "Musl"], k[5]);
     let dilatation = pick(&["CellAveraged", "PerPoint"], k[6]);
@@ -181,7 +190,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     let text = format!(
         r#"(
     name: "semantic",
-    domain: (size: (0.2, 0.2), cells: (8, 8)),
+    domain: (size: ({w}, {h}), cells: ({nx}, {ny})),
     time: (end: 4e-5, step: Cfl(0.5), output_every: 1e-5),
     walls: {walls},
     integration: {integration},
@@ -192,16 +201,21 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     contact: {contact},
     {preset}
     bodies: [
-        (name: "bed", shape: Rectangle(min: (0.0, 0.0), max: (0.2, 0.1)), material: {bed},
+        (name: "bed", shape: Rectangle(min: (0.0, 0.0), max: ({w}, {bed_top})), material: {bed},
          initial_stress: {stress}),
-        (name: "disc", shape: Disc(centre: (0.1, 0.125), radius: 0.02),
+        (name: "disc", shape: Disc(centre: ({half}, {disc_y}), radius: {radius}),
          material: LinearElastic(density: 6500.0, youngs_modulus: 4.0e7, poisson_ratio: 0.45),
          velocity: (0.0, -3.0), tracked: {tracked}),
     ],
     outputs: [{outputs}],
 )"#,
-        outputs = outputs.join(", ")
+        outputs = outputs.join(", "),
+        bed_top = 0.5 * h,
+        half = 0.5 * w,
+        disc_y = 0.5 * h + 1.25 * radius,
     );
+    // The same cell counts over twice the domain: cells twice as large.
+    let coarse = format!("domain.size=({}, {})", 2.0 * w, 2.0 * h);
     let sets = (0..k[19] % 3)
         .map(|i| {
             choose(
@@ -210,7 +224,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
                     "bodies.disc.velocity=(0.0, -300.0)",
                     "bodies.bed.points_per_cell=1",
                     "time.step=Fixed(1e-6)",
-                    "domain.cells=(4, 4)",
+                    &coarse,
                     "limits=(max_kinetic_energy: 1e-9)",
                 ],
                 &[
@@ -225,7 +239,28 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     (text, sets)
 }
 
-/// Loads and, if accepted, runs one assembled scene; returns whether it ran.
+/// Stops a run after step `at`, as a signal would.
+struct StopAt(u64);
+
+impl regolith::run::Progress for StopAt {
+    fn step(&mut self, _clock: &regolith::sim::Clock) {}
+    fn stop(&mut self, clock: &regolith::sim::Clock) -> bool {
+        clock.step == self.0
+    }
+}
+
+/// The run's status and each body's `state_hash`, from its summary.
+fn outcome(dir: &std::path::Path) -> (String, Vec<String>) {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let hashes = s["bodies"].as_array().unwrap().iter();
+    let hashes = hashes.map(|b| b["state_hash"].as_str().unwrap().to_string());
+    (s["status"].as_str().unwrap().to_string(), hashes.collect())
+}
+
+/// Loads and, if accepted, runs one assembled scene on 1 to 4 threads; returns whether it
+/// ran. One run in three is also run on one thread uninterrupted, while the drawn one is
+/// interrupted after a drawn step and resumed: both must end in the same state, bit for bit.
 fn load_and_run(k: &[usize]) -> bool {
     let (text, sets) = semantic_scene(k);
     let dir = tempfile::tempdir().unwrap();
@@ -240,12 +275,56 @@ fn load_and_run(k: &[usize]) -> bool {
         text: &resolved,
         overrides: &sets,
     };
-    let _ = regolith::run::run_scene(
-        &scene,
-        &from,
-        &dir.path().join("out"),
-        regolith::run::CheckpointEvery(Some(2)),
-        &mut |_: &regolith::sim::Clock| {},
+    let run = |threads: usize, out: &std::path::Path, stop: Option<u64>| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| match stop {
+            None => regolith::run::run_scene(
+                &scene,
+                &from,
+                out,
+                regolith::run::CheckpointEvery(Some(2)),
+                &mut |_: &regolith::sim::Clock| {},
+            ),
+            Some(at) => regolith::run::run_scene(
+                &scene,
+                &from,
+                out,
+                regolith::run::CheckpointEvery(None),
+                &mut StopAt(at),
+            ),
+        })
+    };
+    let threads = 1 + k[25] % 4;
+    let out = dir.path().join("out");
+    if k[26] % 3 != 0 {
+        let _ = run(threads, &out, None);
+        return true;
+    }
+    let straight = dir.path().join("straight");
+    let _ = run(1, &straight, None);
+    let at = 1 + (k[26] / 3) as u64 % 4;
+    if let Err(regolith::error::Error::Interrupted { .. }) = run(threads, &out, Some(at)) {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let _ = pool.install(|| {
+            regolith::run::resume_run(
+                &registries,
+                &out,
+                regolith::run::CheckpointEvery(None),
+                |_| Ok(()),
+                &mut |_: &regolith::sim::Clock| {},
+            )
+        });
+    }
+    assert_eq!(
+        outcome(&out),
+        outcome(&straight),
+        "{text}\n{sets:?}: {threads} threads, interrupted after step {at} and resumed, against one thread straight"
     );
     true
 }
@@ -264,7 +343,7 @@ fn valid_items_in_any_combination_run_or_are_refused() {
     let mut runner = TestRunner::new(Config::with_cases(cases));
     let ran = std::cell::Cell::new(0u32);
     runner
-        .run(&prop::collection::vec(0usize..64, 22), |k| {
+        .run(&prop::collection::vec(0usize..64, 27), |k| {
             ran.set(ran.get() + u32::from(load_and_run(&k)));
             Ok(())
         })

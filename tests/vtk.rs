@@ -42,7 +42,7 @@ fn a_resumed_run_lists_every_frame_once_and_writes_the_same_files() {
         "frames at 0, 0.002, 0.004"
     );
     // in the order `regolith resume` takes: restore, then reopen the run's files
-    let mut resumed = Simulation::new(&scene);
+    let mut resumed = Simulation::unobserved(&scene);
     checkpoint.restore(&mut resumed, &scene).unwrap();
     resumed.write_to(split.path()).unwrap();
     resumed.run(|_| {}).unwrap();

@@ -16,6 +16,7 @@ use glam::DVec2;
 use serde::Deserialize;
 
 use crate::body::{Body, BodyState, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -36,7 +37,7 @@ pub struct FlowField {
 }
 
 /// One normalised field.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NormalisedField {
     pub time: f64,
     /// The intruder's speed used (m/s).
@@ -82,9 +83,16 @@ impl Output for FlowField {
         sim.add_systems(StepSet::Output, record_flow_field);
     }
 
-    /// Fields due before `time` were written by the interrupted run.
-    fn resume(&self, world: &mut World, time: f64) {
-        world.resource_mut::<FlowFields>().when.resume(time);
+    /// The times still to come and the fields written so far.
+    fn save(&self, world: &World) -> Carried {
+        let f = world.resource::<FlowFields>();
+        carried(&(&f.when, &f.fields))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut f = world.resource_mut::<FlowFields>();
+        (f.when, f.fields) = restored(state)?;
+        Ok(())
     }
 }
 

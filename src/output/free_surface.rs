@@ -6,12 +6,14 @@
 //! half the body's initial number per cell (so thrown, dilute grains above it do not count,
 //! and a cell half-filled at rest sits at the surface). `free_surface.csv` has `t` and one
 //! column per cell column (`x` of its centre); a column without such a cell has an empty
-//! value. The record lives in memory and the file is rewritten at each interval.
+//! value. The record lives in memory (carried over checkpoints) and the file is rewritten at
+//! each interval.
 
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
 use crate::body::{Body, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
 use crate::plugin::Install;
@@ -63,6 +65,18 @@ impl Output for FreeSurface {
             heights: Vec::new(),
         });
         sim.add_systems(StepSet::Output, record_surface);
+    }
+
+    /// The record so far: its schedule, the initial points per cell, the profiles.
+    fn save(&self, world: &World) -> Carried {
+        let r = world.resource::<SurfaceRecord>();
+        carried(&(&r.interval, r.full, &r.times, &r.heights))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut r = world.resource_mut::<SurfaceRecord>();
+        (r.interval, r.full, r.times, r.heights) = restored(state)?;
+        Ok(())
     }
 }
 

@@ -10,13 +10,15 @@
 //! insensitive to how much the numerical front is smeared); the front speed is the
 //! least-squares slope of bin radius against arrival time. The diagram goes to
 //! `pressure_front.csv` (`t` and one column per bin centre) and the speed to `summary.json`
-//! (`pressure_front`). The record lives in memory: a resumed run starts a new one.
+//! (`pressure_front`). The record lives in memory and is carried over checkpoints, so a
+//! resumed run continues it.
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::linefit::line_fit;
 use crate::output::summary::Section;
 use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
@@ -171,6 +173,18 @@ impl Output for PressureFront {
             rows: Vec::new(),
         });
         sim.add_systems(StepSet::Output, record_pressure);
+    }
+
+    /// The record so far: its schedule, the pressures at t = 0, the rows.
+    fn save(&self, world: &World) -> Carried {
+        let r = world.resource::<PressureRecord>();
+        carried(&(&r.interval, &r.initial, &r.times, &r.rows))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut r = world.resource_mut::<PressureRecord>();
+        (r.interval, r.initial, r.times, r.rows) = restored(state)?;
+        Ok(())
     }
 }
 

@@ -31,6 +31,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::body::{Body, BodyState, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::grid::GridField;
 use crate::output::Output;
 use crate::output::summary::Section;
@@ -164,7 +165,7 @@ pub struct Impact {
 }
 
 /// What the `Impact` output watches, and the instant of first contact once it happened
-/// (saved in checkpoints).
+/// (carried over checkpoints).
 #[derive(Resource, Clone, Debug)]
 pub struct ImpactWatch {
     pub body: String,
@@ -286,6 +287,18 @@ impl Output for Impact {
             before: start,
         });
         sim.add_systems(crate::step::StepSet::Output, record_first_contact);
+    }
+
+    /// The first contact, once seen, and the state the body ended the last step with.
+    fn save(&self, world: &World) -> Carried {
+        let watch = world.resource::<ImpactWatch>();
+        carried(&(watch.contact, watch.before))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut watch = world.resource_mut::<ImpactWatch>();
+        (watch.contact, watch.before) = restored(state)?;
+        Ok(())
     }
 }
 /// The impact measures from the trajectory rows and the recorded first contact: `None`

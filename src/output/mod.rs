@@ -22,6 +22,7 @@ use std::sync::Mutex;
 
 use bevy_ecs::prelude::*;
 
+use crate::carry::Carried;
 use crate::error::Fault;
 use crate::plugin::Install;
 use crate::registry::DynItem;
@@ -41,9 +42,20 @@ pub trait Output: DynItem {
     }
     /// Adds the output's resources and its systems (in [`crate::step::StepSet::Output`]).
     fn install(&self, sim: &mut Install);
-    /// Re-aligns the output's own schedule with a run resumed at `time` (the state it
-    /// would have had then); by default nothing.
-    fn resume(&self, _world: &mut World, _time: f64) {}
+    /// What the output carries across a checkpoint (`crate::carry`). By default it says it
+    /// cannot, so a resumed run is marked partial rather than restart the output's record
+    /// silently: an output with state returns it, one without returns `Carried::Nothing`.
+    fn save(&self, _world: &World) -> Carried {
+        Carried::Lost(format!(
+            "the {} output does not save its state in checkpoints: its record restarted at the resume",
+            self.name()
+        ))
+    }
+    /// Puts back the state `save` returned (as `Carried::State`), in a fresh simulation of
+    /// the same scene, before the first resumed step.
+    fn restore(&self, _world: &mut World, _state: &[u8]) -> Result<(), String> {
+        Err(format!("the {} output cannot restore a state", self.name()))
+    }
     /// The output's entries in `summary.json`; by default none.
     fn summary(&self, _world: &World) -> summary::Section {
         summary::Section::default()
@@ -76,18 +88,10 @@ impl Interval {
         }
         true
     }
-
-    /// Re-aligns with a run resumed at `time`: the next output is the first after it.
-    /// Returns how many outputs the interrupted run wrote (t = 0 included).
-    pub fn resume(&mut self, time: f64) -> usize {
-        let done = (time / self.every + 1e-9).floor() + 1.0;
-        self.next = done * self.every;
-        done as usize
-    }
 }
 
 /// Listed output times: each is written at the first step at or past it.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Instants {
     times: Vec<f64>,
     next: usize,
@@ -117,21 +121,15 @@ impl Instants {
         true
     }
 
-    /// How many listed times have passed; after a resume at `time`, those before it.
+    /// How many listed times have passed.
     pub fn done(&self) -> usize {
-        self.next
-    }
-
-    /// Re-aligns with a run resumed at `time`; returns how many listed times had passed.
-    pub fn resume(&mut self, time: f64) -> usize {
-        self.next = self.times.iter().filter(|&&t| t < time).count();
         self.next
     }
 }
 
 /// When a file output writes: `every` seconds or `at` listed times, exactly one of them
 /// (the two optional fields of `Snapshots(..)` and `Vtk(..)`).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub enum Timing {
     Every(Interval),
     At(Instants),
@@ -163,14 +161,6 @@ impl Timing {
         match self {
             Timing::Every(interval) => interval.due(clock),
             Timing::At(instants) => instants.due(clock),
-        }
-    }
-
-    /// Re-aligns with a run resumed at `time`; returns how many files were written before.
-    pub fn resume(&mut self, time: f64) -> usize {
-        match self {
-            Timing::Every(interval) => interval.resume(time),
-            Timing::At(instants) => instants.resume(time),
         }
     }
 }

@@ -13,6 +13,7 @@ use serde::Deserialize;
 
 use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
@@ -49,11 +50,16 @@ impl Output for Snapshots {
         sim.add_systems(StepSet::Output, write_snapshot);
     }
 
-    /// Snapshots were written at 0, every, 2 every, ... (or at the listed times) up to
-    /// `time`.
-    fn resume(&self, world: &mut World, time: f64) {
-        let mut clock = world.resource_mut::<SnapshotClock>();
-        clock.count = clock.when.resume(time);
+    /// The schedule and the number of the next file.
+    fn save(&self, world: &World) -> Carried {
+        let c = world.resource::<SnapshotClock>();
+        carried(&(&c.when, c.count))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut c = world.resource_mut::<SnapshotClock>();
+        (c.when, c.count) = restored(state)?;
+        Ok(())
     }
 }
 

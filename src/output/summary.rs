@@ -38,6 +38,11 @@ pub struct Summary {
     pub status: String,
     /// Why a failed run stopped.
     pub failure: Option<String>,
+    /// Whether some output's or condition's results cover only part of the run: one that
+    /// could not carry its state over a resume, or one added at a resume.
+    pub partial: bool,
+    /// Why, one sentence per item (empty when `partial` is false).
+    pub partial_because: Vec<String>,
     pub integration: String,
     pub steps: u64,
     /// Simulated time reached (s).

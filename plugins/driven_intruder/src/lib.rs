@@ -16,6 +16,7 @@
 
 use regolith::bevy_ecs::prelude::*;
 use regolith::body::{Body, Points};
+use regolith::carry::{Carried, carried, restored};
 use regolith::condition::Condition;
 use regolith::glam::DVec2;
 use regolith::grid::GridField;
@@ -26,7 +27,7 @@ use regolith::registry::Item;
 use regolith::scene::Scene;
 use regolith::sim::Clock;
 use regolith::step::{StepSet, output_due};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// `Driven(body: "intruder", velocity: (0.0, -0.5))`.
 #[derive(Clone, Debug, Deserialize)]
@@ -69,7 +70,6 @@ impl Condition for Driven {
             force: DVec2::ZERO,
             contact: DVec2::ZERO,
             rows: Vec::new(),
-            resumed_at: None,
         });
         sim.add_systems(StepSet::Contact, drive);
         sim.add_systems(StepSet::Output, record.run_if(output_due));
@@ -109,13 +109,21 @@ impl Condition for Driven {
         section
     }
 
-    fn resume(&self, world: &mut World, time: f64) {
-        world.resource_mut::<Drive>().resumed_at = Some(time);
+    /// The last step's forces (the next record reports them) and the rows so far.
+    fn save(&self, world: &World) -> Carried {
+        let d = world.resource::<Drive>();
+        carried(&(d.force, d.contact, &d.rows))
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut d = world.resource_mut::<Drive>();
+        (d.force, d.contact, d.rows) = restored(state)?;
+        Ok(())
     }
 }
 
 /// One recorded instant.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     pub time: f64,
     /// Lowest point of the body (its tip), m.
@@ -135,9 +143,6 @@ pub struct Drive {
     /// The contact force on the body over the last step.
     pub contact: DVec2,
     pub rows: Vec<Row>,
-    /// The time a resumed run started from: the rows written before it are read back from
-    /// `driven.csv` at the first record.
-    resumed_at: Option<f64>,
 }
 
 /// Sets every node of the driven body to the prescribed velocity after contact, and keeps
@@ -192,12 +197,6 @@ fn record(
         return;
     };
     let path = dir.join("driven.csv");
-    if let Some(from) = state.resumed_at.take() {
-        match read_rows(&path, from) {
-            Ok(rows) => state.rows = rows,
-            Err(e) => faults.report(&clock, format!("cannot read {}: {e}", path.display())),
-        }
-    }
     state.rows.push(row);
     if let Err(e) = write_atomic(&path, to_csv(&state.rows).as_bytes()) {
         faults.report(&clock, format!("cannot write {}: {e}", path.display()));
@@ -215,31 +214,6 @@ fn to_csv(rows: &[Row]) -> String {
         );
     }
     text
-}
-
-/// The rows of `driven.csv` up to `time` (a resumed run keeps what it had written).
-pub fn read_rows(path: &std::path::Path, time: f64) -> Result<Vec<Row>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
-    let mut rows = Vec::new();
-    for (k, line) in text.lines().enumerate().skip(1) {
-        let v: Vec<f64> = line
-            .split(',')
-            .map(str::parse)
-            .collect::<Result<_, _>>()
-            .map_err(|e| format!("line {}: {e}", k + 1))?;
-        let [t, bottom, fx, fy, cx, cy] = v[..] else {
-            return Err(format!("line {}: expected 6 columns ({HEADER})", k + 1));
-        };
-        if t <= time {
-            rows.push(Row {
-                time: t,
-                bottom,
-                force: DVec2::new(fx, fy),
-                contact: DVec2::new(cx, cy),
-            });
-        }
-    }
-    Ok(rows)
 }
 
 /// Adds the `Driven` condition.

@@ -19,7 +19,7 @@
 //!   Rerun's 2D views draw y downward, the simulation's y points up;
 //! * `plots/<body>/kinetic_energy` for every body; for tracked bodies also
 //!   `plots/<body>/depth` (downward displacement of the centre of mass since the first
-//!   frame: t = 0, or the time a resumed run starts recording),
+//!   frame: t = 0, or for a recording first asked for when a run resumed, that time),
 //!   `plots/<body>/velocity/{x,y}`, `plots/<body>/acceleration/{x,y}` (centre-of-mass velocity
 //!   differenced between recorded frames) and `plots/<body>/contact_force/{x,y}` (the force
 //!   the other bodies exert through contact, N per metre of thickness);
@@ -38,6 +38,7 @@ mod legend;
 mod record;
 
 use regolith::bevy_ecs::prelude::*;
+use regolith::carry::{Carried, carried, restored};
 use regolith::output::Output;
 use regolith::plugin::{Install, Plugin, Regolith};
 use regolith::registry::Item;
@@ -89,6 +90,18 @@ impl Output for Rerun {
     fn install(&self, sim: &mut Install) {
         sim.insert_resource(record::Recorder::new(self.clone()));
         sim.add_systems(StepSet::Output, record::record);
+    }
+
+    /// The recording's id, the file's length and what the plots difference against: a
+    /// resumed run appends to the same recording (`record` module docs).
+    fn save(&self, world: &World) -> Carried {
+        carried(&world.resource::<record::Recorder>().saved())
+    }
+
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let saved = restored(state)?;
+        world.resource_mut::<record::Recorder>().restore(saved);
+        Ok(())
     }
 }
 

@@ -3,9 +3,19 @@
 //! at the end).
 //!
 //! A stream that cannot be opened (unwritable file, no viewer to spawn) stops the run with a
-//! message, like any output that cannot be written. The stream is flushed at the last step
-//! and when the simulation is dropped, so a failed run keeps what was recorded before it.
+//! message, like any output that cannot be written.
+//!
+//! The recorder writes the file itself: rerun encodes each frame into an in-memory stream
+//! (`BinaryStreamStorage`), and the recorder appends those bytes to the `.rrd` after the
+//! frame, so the file always ends with a whole frame and a failed run keeps every frame it
+//! logged. A checkpoint carries the file's length, the recording's id and what the plots
+//! difference against; a resumed run cuts the file back to that length (dropping frames
+//! logged after the checkpoint, which it logs again) and appends under the same recording
+//! id. Rerun reads concatenated streams as one recording, so the resumed file opens as the
+//! uninterrupted run's would.
 
+use std::fs::File;
+use std::io::{Seek, SeekFrom, Write};
 use std::path::PathBuf;
 
 use regolith::bevy_ecs::prelude::*;
@@ -14,18 +24,58 @@ use regolith::glam::DVec2;
 use regolith::grid::{GridField, GridGeometry};
 use regolith::output::{OutputFaults, RunDir};
 use regolith::resources::{Clock, OutputClock};
+use rerun::sink::{BinaryStreamSink, BinaryStreamStorage};
 use rerun::{
     AnyValues, Arrows2D, LineStrips2D, Points2D, RecordingStream, RecordingStreamBuilder, Scalars,
 };
+use serde::{Deserialize, Serialize};
 
 use crate::Rerun;
 use crate::{colour, document, legend};
 
 /// What the last frame saw of a tracked body (for the acceleration).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 struct Last {
     time: f64,
     velocity: DVec2,
+}
+
+/// The `.rrd` the recorder appends each frame's bytes to (module docs).
+struct RecordingFile {
+    path: PathBuf,
+    file: File,
+    /// The stream's encoded messages not yet appended.
+    storage: BinaryStreamStorage,
+    /// Bytes in the file.
+    written: u64,
+}
+
+impl RecordingFile {
+    /// Appends what the stream has encoded since the last call.
+    fn append(&mut self) -> Result<(), String> {
+        let Some(bytes) = self.storage.read() else {
+            return Ok(());
+        };
+        self.file
+            .write_all(&bytes)
+            .and_then(|_| self.file.flush())
+            .map_err(|e| format!("cannot write the recording {}: {e}", self.path.display()))?;
+        self.written += bytes.len() as u64;
+        Ok(())
+    }
+}
+
+/// What a checkpoint carries of the recorder: enough for a resumed run to go on with the
+/// same recording in the same file.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Saved {
+    /// The recording's id (empty before the first frame).
+    recording: String,
+    /// Bytes of the file holding every frame up to the checkpoint.
+    written: u64,
+    start: Vec<DVec2>,
+    last: Vec<Option<Last>>,
+    first: bool,
 }
 
 /// The recorder's state between steps (buffers are kept to avoid reallocating per frame).
@@ -33,6 +83,11 @@ struct Last {
 pub struct Recorder {
     params: Rerun,
     stream: Option<RecordingStream>,
+    file: Option<RecordingFile>,
+    /// The recording's id; a resumed run keeps the interrupted run's.
+    recording: String,
+    /// Set by a resume: the file's length at the checkpoint, to cut it back to when opened.
+    resume_from: Option<u64>,
     /// Centre of mass of each body at the first frame (for the depth).
     start: Vec<DVec2>,
     last: Vec<Option<Last>>,
@@ -50,6 +105,9 @@ impl Recorder {
         Recorder {
             params,
             stream: None,
+            file: None,
+            recording: String::new(),
+            resume_from: None,
             start: Vec::new(),
             last: Vec::new(),
             values: Vec::new(),
@@ -61,49 +119,100 @@ impl Recorder {
         }
     }
 
-    /// Opens the file and/or viewer sinks.
+    /// What a checkpoint keeps (module docs): every logged frame is in the file already.
+    pub fn saved(&self) -> Saved {
+        Saved {
+            recording: self.recording.clone(),
+            written: self.file.as_ref().map_or(0, |f| f.written),
+            start: self.start.clone(),
+            last: self.last.clone(),
+            first: self.first,
+        }
+    }
+
+    /// Takes back what [`Recorder::carried`] gave, before the first resumed step.
+    pub fn restore(&mut self, saved: Saved) {
+        if saved.recording.is_empty() {
+            return;
+        }
+        self.recording = saved.recording;
+        self.resume_from = Some(saved.written);
+        self.start = saved.start;
+        self.last = saved.last;
+        self.first = saved.first;
+    }
+
+    /// Opens the stream, with the file it appends to and/or the viewer it streams to.
     fn open(
-        &self,
+        &mut self,
         dir: Option<&PathBuf>,
         bodies: &[(&str, bool)],
     ) -> Result<RecordingStream, String> {
-        let builder =
-            RecordingStreamBuilder::new("regolith").with_blueprint(document::layout(bodies));
-        let file = self.params.file.as_ref().map(|f| {
+        if self.recording.is_empty() {
+            self.recording = rerun::external::re_log_types::RecordingId::random().to_string();
+        }
+        let stream = RecordingStreamBuilder::new("regolith")
+            .recording_id(self.recording.clone())
+            .with_blueprint(document::layout(bodies))
+            .buffered()
+            .map_err(|e| format!("rerun: {e}"))?;
+        let path = self.params.file.as_ref().map(|f| {
             let f = PathBuf::from(f);
             match dir {
                 Some(d) if f.is_relative() => d.join(f),
                 _ => f,
             }
         });
-        let fail = |what: &str, e: &dyn std::fmt::Display| format!("{what}: {e}");
-        match (&file, self.params.spawn) {
-            (Some(path), false) => builder.save(path).map_err(|e| {
-                fail(
-                    &format!("cannot write the recording {}", path.display()),
-                    &e,
-                )
-            }),
-            (None, _) => builder.spawn().map_err(|e| fail(VIEWER, &e)),
-            (Some(path), true) => {
-                let stream = builder.buffered().map_err(|e| fail("rerun", &e))?;
-                let viewer =
-                    rerun::spawn(&rerun::SpawnOptions::default()).map_err(|e| fail(VIEWER, &e))?;
-                let url = format!("rerun+http://127.0.0.1:{}/proxy", viewer.port);
-                let uri = url.parse().map_err(|e| fail("viewer address", &e))?;
-                let sink = rerun::sink::FileSink::new(path).map_err(|e| {
-                    fail(
-                        &format!("cannot write the recording {}", path.display()),
-                        &e,
-                    )
-                })?;
-                let sinks: Vec<Box<dyn rerun::sink::LogSink>> =
-                    vec![Box::new(sink), Box::new(rerun::sink::GrpcSink::new(uri))];
-                stream.set_sinks(sinks);
-                Ok(stream)
-            }
+        let mut sinks: Vec<Box<dyn rerun::sink::LogSink>> = Vec::new();
+        if let Some(path) = path {
+            let (sink, storage) = BinaryStreamSink::new(stream.clone());
+            sinks.push(Box::new(sink));
+            let file = open_file(&path, self.resume_from.take())?;
+            self.file = Some(RecordingFile {
+                path,
+                written: file.1,
+                file: file.0,
+                storage,
+            });
         }
+        if self.params.spawn {
+            let fail = |e: &dyn std::fmt::Display| format!("{VIEWER}: {e}");
+            let viewer = rerun::spawn(&rerun::SpawnOptions::default()).map_err(|e| fail(&e))?;
+            let url = format!("rerun+http://127.0.0.1:{}/proxy", viewer.port);
+            let uri = url.parse().map_err(|e| format!("viewer address: {e}"))?;
+            sinks.push(Box::new(rerun::sink::GrpcSink::new(uri)));
+        }
+        stream.set_sinks(sinks);
+        Ok(stream)
     }
+}
+
+/// The recording file and its length: created afresh, or for a resumed run the existing
+/// file cut back to the `resume_from` bytes that held every frame up to the checkpoint.
+fn open_file(path: &PathBuf, resume_from: Option<u64>) -> Result<(File, u64), String> {
+    let cannot = |e: std::io::Error| format!("cannot write the recording {}: {e}", path.display());
+    let Some(length) = resume_from else {
+        return File::create(path).map(|f| (f, 0)).map_err(cannot);
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(|e| {
+            format!(
+                "cannot continue the recording {} of the interrupted run: {e} (resume without the recording, or restore the file)",
+                path.display()
+            )
+        })?;
+    let found = file.metadata().map_err(cannot)?.len();
+    if found < length {
+        return Err(format!(
+            "the recording {} holds {found} bytes, fewer than the {length} the checkpoint's frames took: frames before the resume are missing (resume without the recording, or restore the file)",
+            path.display()
+        ));
+    }
+    file.set_len(length).map_err(cannot)?;
+    file.seek(SeekFrom::End(0)).map_err(cannot)?;
+    Ok((file, length))
 }
 
 const VIEWER: &str = "cannot start the Rerun viewer (install the one matching this build with \
@@ -142,8 +251,11 @@ pub fn record(
                     &sorted,
                     recorder.params.grid,
                 );
-                recorder.start = sorted.iter().map(|b| b.3.centre_of_mass).collect();
-                recorder.last = vec![None; sorted.len()];
+                // A resumed recording keeps the interrupted run's first frame and last frames.
+                if recorder.start.is_empty() {
+                    recorder.start = sorted.iter().map(|b| b.3.centre_of_mass).collect();
+                    recorder.last = vec![None; sorted.len()];
+                }
                 recorder.stream = Some(stream);
             }
             Err(message) => {
@@ -228,8 +340,12 @@ pub fn record(
     if !clock.observing {
         scalar(stream, "plots/time_step", clock.dt);
     }
-    if clock.last_step {
-        let _ = stream.flush_blocking();
+    // Every frame whole in the file before the step ends (module docs).
+    let _ = stream.flush_blocking();
+    if let Some(file) = rec.file.as_mut()
+        && let Err(message) = file.append()
+    {
+        faults.report(&clock, message);
     }
 }
 

@@ -5,17 +5,17 @@
 //! field. `vtk/points.pvd` (and `vtk/grid.pvd`) list the frames with their simulated times,
 //! so ParaView's time slider steps through the run; they are rewritten (atomically) after
 //! every frame, so a run that fails or is interrupted leaves a collection of the frames it
-//! wrote. A resumed run carries the collection's earlier frames over.
+//! wrote. Checkpoints carry the frame count and the collections' entries, so a resumed run
+//! lists every frame, the earlier ones included.
 
 mod xml;
-
-use std::path::Path;
 
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
 use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
+use crate::carry::{Carried, carried, restored};
 use crate::grid::{GridField, GridGeometry};
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -138,9 +138,6 @@ struct VtkState {
     frame: usize,
     points: Vec<Entry>,
     nodes: Vec<Entry>,
-    /// Set by a resume at this time: the collections on disk hold the earlier frames,
-    /// read at the first frame after it (the run's directory is not known at resume).
-    carry_over: Option<f64>,
 }
 
 impl Item for Vtk {
@@ -168,28 +165,21 @@ impl Output for Vtk {
             frame: 0,
             points: Vec::new(),
             nodes: Vec::new(),
-            carry_over: None,
         });
         sim.add_systems(StepSet::Output, write_frame);
     }
 
-    /// Frames were written at 0, every, 2 every, ... (or the listed times) before `time`;
-    /// the collections keep the entries of those frames.
-    fn resume(&self, world: &mut World, time: f64) {
-        let mut state = world.resource_mut::<VtkState>();
-        state.frame = state.when.resume(time);
-        state.carry_over = Some(time);
+    /// The schedule, the next frame's number and the collections' entries so far.
+    fn save(&self, world: &World) -> Carried {
+        let v = world.resource::<VtkState>();
+        carried(&(&v.when, v.frame, &v.points, &v.nodes))
     }
-}
 
-/// The entries of the collection `name` in `folder` from before `time` (none when the
-/// file is missing: the frames were lost with it, and are not listed).
-fn earlier_entries(folder: &Path, name: &str, time: f64) -> Vec<Entry> {
-    let text = std::fs::read_to_string(folder.join(name)).unwrap_or_default();
-    read_collection(&text)
-        .into_iter()
-        .filter(|e| e.time < time - 1e-12)
-        .collect()
+    fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
+        let mut v = world.resource_mut::<VtkState>();
+        (v.when, v.frame, v.points, v.nodes) = restored(state)?;
+        Ok(())
+    }
 }
 
 /// File stems for the bodies: their names with anything but letters, digits, `-` and `_`
@@ -238,10 +228,6 @@ fn write_frame(
     if let Err(e) = std::fs::create_dir_all(&folder) {
         faults.report(&clock, format!("cannot create {}: {e}", folder.display()));
         return;
-    }
-    if let Some(time) = state.carry_over.take() {
-        state.points = earlier_entries(&folder, POINTS_COLLECTION, time);
-        state.nodes = earlier_entries(&folder, GRID_COLLECTION, time);
     }
     let mut sorted: Vec<_> = bodies.iter().collect();
     sorted.sort_by_key(|(b, ..)| b.index);

@@ -174,7 +174,7 @@ pub fn image_data(
 }
 
 /// One file of a time collection.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Entry {
     pub time: f64,
     /// Which data set of the frame (one per body).
@@ -201,7 +201,7 @@ pub fn collection(entries: &[Entry]) -> String {
     s
 }
 
-/// The entries of a `.pvd` this module wrote (to carry a collection over a resume).
+/// The entries of a `.pvd` this module wrote (for readers of a run's files).
 pub fn read_collection(text: &str) -> Vec<Entry> {
     let attribute = |line: &str, name: &str| -> Option<String> {
         let start = line.find(&format!("{name}=\""))? + name.len() + 2;
