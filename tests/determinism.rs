@@ -191,3 +191,45 @@ fn every_periodic_grid_gives_the_same_state_at_any_thread_count() {
         differ.join("\n")
     );
 }
+
+/// Every shipped scene's state after 40 steps is bitwise the same on 1 and 2 threads.
+#[test]
+fn every_shipped_scene_gives_the_same_state_on_one_and_two_threads() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    scenes.sort();
+    let registries = regolith::Regolith::default().registries();
+    let state = |threads: usize, scene: &regolith::Scene| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut sim = Simulation::new(scene);
+            for _ in 0..40 {
+                if sim.finished() {
+                    break;
+                }
+                sim.step().unwrap();
+            }
+            let names: Vec<String> = sim.bodies().into_iter().map(|b| b.0.name).collect();
+            names
+                .iter()
+                .map(|n| sim.state_hash(n).unwrap())
+                .collect::<Vec<_>>()
+        })
+    };
+    for path in &scenes {
+        let (scene, _) = regolith::Scene::load(path, &[], &registries).unwrap();
+        assert_eq!(
+            state(1, &scene),
+            state(2, &scene),
+            "{}: the state depends on the thread count",
+            path.display()
+        );
+    }
+}
