@@ -112,7 +112,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     };
     let (bottom, top) = if k[22] % 8 == 7 {
         ("Periodic", pick(&SIDE, k[3]))
-    } else if k[22] % 3 == 0 {
+    } else if k[22].is_multiple_of(3) {
         ("Periodic", "Periodic")
     } else {
         (pick(&SIDE, k[2]), pick(&SIDE, k[3]))
@@ -299,7 +299,7 @@ fn load_and_run(k: &[usize]) -> bool {
     };
     let threads = 1 + k[25] % 4;
     let out = dir.path().join("out");
-    if k[26] % 3 != 0 {
+    if !k[26].is_multiple_of(3) {
         let _ = run(threads, &out, None);
         return true;
     }
