@@ -1,4 +1,7 @@
-//! The background grid: its geometry (a resource) and one body's nodal field (a component).
+//! The background grid: its geometry (a resource), one body's nodal field (a component), and
+//! how the lock-free scatter cuts the grid's rows into bands (`BandLayout`: a function of the
+//! geometry alone, kept here so that the scene check can prove it race-free before a run
+//! without depending on the step).
 //!
 //! Every body keeps its own nodal field so that contact can compare bodies node by node
 //! (docs/model.md §2 and §5). Fields are struct-of-arrays so the scatter and gather loops run over
@@ -190,4 +193,185 @@ fn zero<T: Default + Copy + Send>(values: &mut [T]) {
     values
         .par_chunks_mut(CLEAR_BLOCK)
         .for_each(|block| block.fill(T::default()));
+}
+
+/// Cell rows per band (at least 3: the lock-free scatter, `step::bands`).
+pub const BAND_ROWS: usize = 4;
+
+/// How a grid's cell rows are cut into bands and in which phases the bands scatter (`step::bands`
+/// docs). A function of the grid alone, never of the points or the thread count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BandLayout {
+    /// Cell rows of the grid.
+    rows: usize,
+    /// Node rows of the grid (`rows` on a periodic y axis, else `rows + 1`).
+    node_rows: usize,
+    periodic: bool,
+    count: usize,
+}
+
+impl BandLayout {
+    pub fn of(grid: &GridGeometry) -> BandLayout {
+        let rows = grid.cells[1];
+        let periodic = grid.periodic[1];
+        let count = if periodic {
+            (rows / BAND_ROWS).max(1)
+        } else {
+            rows.div_ceil(BAND_ROWS)
+        };
+        BandLayout {
+            rows,
+            node_rows: grid.nodes_along(1),
+            periodic,
+            count,
+        }
+    }
+
+    /// Whether the y axis is periodic (the first and last bands are neighbours).
+    pub fn periodic(&self) -> bool {
+        self.periodic
+    }
+
+    /// Number of bands.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The band of cell row `j`.
+    #[inline]
+    pub fn band_of_row(&self, j: usize) -> u32 {
+        (j / BAND_ROWS).min(self.count.saturating_sub(1)) as u32
+    }
+
+    /// The cell rows of band `b`: `BAND_ROWS` of them, the last band the rest.
+    pub fn rows(&self, b: usize) -> Range<usize> {
+        let first = b * BAND_ROWS;
+        let last = if b + 1 >= self.count {
+            self.rows
+        } else {
+            first + BAND_ROWS
+        };
+        first.min(self.rows)..last
+    }
+
+    /// The node rows band `b` may scatter to: from one below its first cell row to two
+    /// above its last, as `(first, count)`, `first` wrapped onto the grid on a periodic
+    /// axis, `count` at most the grid's node rows.
+    pub(crate) fn node_rows(&self, b: usize) -> (usize, usize) {
+        let cells = self.rows(b);
+        if self.periodic {
+            let first = (cells.start + self.node_rows - 1) % self.node_rows;
+            (first, (cells.len() + 3).min(self.node_rows))
+        } else {
+            let first = cells.start.saturating_sub(1);
+            (first, (cells.end + 2).min(self.node_rows) - first)
+        }
+    }
+
+    /// Whether band `b` scatters alone after the two parallel phases: the last of an odd
+    /// number of bands on a periodic axis, a neighbour of band 0 of the same parity.
+    fn lone(&self, b: usize) -> bool {
+        self.periodic && self.count % 2 == 1 && self.count > 1 && b == self.count - 1
+    }
+
+    /// The phase band `b` scatters in: 0 (even bands), 1 (odd bands) or 2 (the lone last
+    /// band, see [`BandLayout::lone`]).
+    pub fn phase(&self, b: usize) -> usize {
+        if self.lone(b) { 2 } else { b % 2 }
+    }
+
+    /// Checks what the lock-free scatter relies on: no two bands of one phase share a node
+    /// row of their windows (the rows their points' stencils can reach). `Err` names the
+    /// first pair that would race.
+    pub fn check(&self) -> Result<(), String> {
+        let mut owner: Vec<Vec<Option<usize>>> = vec![vec![None; self.node_rows]; 3];
+        for b in 0..self.count {
+            let (first, count) = self.node_rows(b);
+            let phase = &mut owner[self.phase(b)];
+            for k in 0..count {
+                let row = (first + k) % self.node_rows;
+                if let Some(other) = phase[row].replace(b) {
+                    return Err(format!(
+                        "bands {other} and {b} scatter in the same phase and both reach node row {row} \
+                         ({} cell rows, y {})",
+                        self.rows,
+                        if self.periodic { "periodic" } else { "bounded" }
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::{BAND_ROWS, BandLayout, GridGeometry};
+
+    fn grid(rows: usize, periodic: bool) -> GridGeometry {
+        GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [3, rows],
+            periodic: [false, periodic],
+        }
+    }
+
+    /// For every row count up to 1000, bounded or periodic in y: the bands tile the rows,
+    /// each cell row's stencil (node rows `j - 1` to `j + 2`) lies in its band's window, and
+    /// no two bands of one phase share a node row.
+    #[test]
+    fn every_layout_is_free_of_races() {
+        for periodic in [false, true] {
+            for rows in 1..=1000 {
+                let layout = BandLayout::of(&grid(rows, periodic));
+                let at = format!("{rows} rows, periodic {periodic}");
+                layout.check().unwrap_or_else(|e| panic!("{at}: {e}"));
+                let nodes = grid(rows, periodic).nodes_along(1) as i64;
+                let mut next = 0;
+                for b in 0..layout.count() {
+                    let cells = layout.rows(b);
+                    assert_eq!(cells.start, next, "{at}: band {b} does not follow on");
+                    assert!(!cells.is_empty(), "{at}: band {b} is empty");
+                    next = cells.end;
+                    let (first, span) = layout.node_rows(b);
+                    for j in cells {
+                        assert_eq!(layout.band_of_row(j), b as u32, "{at}: row {j}");
+                        for r in j as i64 - 1..=j as i64 + 2 {
+                            let r = if periodic {
+                                r.rem_euclid(nodes)
+                            } else if (0..nodes).contains(&r) {
+                                r
+                            } else {
+                                continue;
+                            };
+                            let d = (r - first as i64).rem_euclid(nodes);
+                            assert!(d < span as i64, "{at}: row {j} reaches node row {r}");
+                        }
+                    }
+                }
+                assert_eq!(next, rows, "{at}: the bands do not cover the rows");
+            }
+        }
+    }
+
+    /// The layout before issue 35 cut a periodic axis into `ceil(rows / BAND_ROWS)` bands,
+    /// the last one short: with 54 rows bands 0 and 12 ran in one phase and both reached
+    /// the wrapped node row 53. The check finds it.
+    #[test]
+    fn the_check_finds_the_old_periodic_race() {
+        let fixed = BandLayout::of(&grid(54, true));
+        assert_eq!(fixed.count(), 13);
+        let old = BandLayout {
+            count: 54usize.div_ceil(BAND_ROWS),
+            ..fixed
+        };
+        let err = old.check().expect_err("the old layout races");
+        assert!(
+            err.contains("bands 0 and 12") && err.contains("row 53"),
+            "{err}"
+        );
+    }
 }

@@ -221,7 +221,7 @@ impl Scene {
         }
         // The lock-free scatter's guarantee, checked for this grid before anything runs
         // (every grid passes: a unit test runs the check for every row count up to 1000).
-        if let Err(why) = crate::step::BandLayout::of(&self.grid()).check() {
+        if let Err(why) = crate::grid::BandLayout::of(&self.grid()).check() {
             return err(
                 "cells",
                 format!("this grid cannot be scattered without a data race: {why}"),

@@ -17,8 +17,9 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::bands::{BandLayout, Bands};
+use super::bands::Bands;
 use crate::body::Points;
+use crate::grid::BandLayout;
 use crate::grid::GridGeometry;
 use crate::shape_functions::{Footprint, Scheme};
 

@@ -14,7 +14,7 @@ mod prepare;
 mod schedule;
 pub mod transfer;
 
-pub use bands::{BandLayout, Bands};
+pub use bands::Bands;
 pub use cell_average::CellDilatation;
 pub use grid_update::{apply_walls, update_grid};
 pub use locate::{Location, locate_points};
