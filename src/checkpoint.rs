@@ -184,35 +184,23 @@ impl Checkpoint {
         sim.trajectory_mut().rows = self.trajectory;
         let mut partial = self.partial.0;
         for (k, output) in scene.outputs.iter().enumerate() {
-            let saved = find(&self.items, "output", k, output.name());
             let restore = |state: &[u8]| output.restore(&mut sim.world, state);
-            carry_over(
-                saved,
-                ("output", output.name()),
-                time,
-                restore,
-                &mut partial,
-            )?;
+            let key = ("output", k, output.name());
+            carry_over(&self.items, key, time, restore, &mut partial)?;
         }
         for (k, condition) in scene.conditions.iter().enumerate() {
-            let saved = find(&self.items, "condition", k, condition.name());
             let restore = |state: &[u8]| condition.restore(&mut sim.world, state);
-            carry_over(
-                saved,
-                ("condition", condition.name()),
-                time,
-                restore,
-                &mut partial,
-            )?;
+            let key = ("condition", k, condition.name());
+            carry_over(&self.items, key, time, restore, &mut partial)?;
         }
         // An item of the interrupted run that the resumed scene lacks (a recording not asked
         // for again) stops at the checkpoint.
         for item in &self.items {
-            let list: Vec<&str> = match item.kind.as_str() {
-                "output" => scene.outputs.iter().map(|o| o.name()).collect(),
-                _ => scene.conditions.iter().map(|c| c.name()).collect(),
+            let listed = match item.kind.as_str() {
+                "output" => scene.outputs.get(item.index).map(|o| o.name()),
+                _ => scene.conditions.get(item.index).map(|c| c.name()),
             };
-            if list.get(item.index) != Some(&item.name.as_str()) {
+            if listed != Some(item.name.as_str()) {
                 partial.push(format!(
                     "the {} {} of the interrupted run was not asked for again: its record ends at t = {time} s",
                     item.name, item.kind
@@ -226,30 +214,20 @@ impl Checkpoint {
     }
 }
 
-/// The saved state of the `index`-th item of `kind` if it is called `name`.
-fn find<'a>(
-    items: &'a [ItemCheckpoint],
-    kind: &str,
-    index: usize,
-    name: &str,
-) -> Option<&'a Carried> {
-    items
-        .iter()
-        .find(|i| i.kind == kind && i.index == index && i.name == name)
-        .map(|i| &i.carried)
-}
-
-/// Restores one item from what the checkpoint holds of it, or records why its results are
-/// partial: it could not carry its state, or it was not in the run that was interrupted (an
-/// output added at the resume, such as a recording).
+/// Restores the `index`-th item of `kind`, called `name`, from what the checkpoint holds of
+/// it, or records why its results are partial: it could not carry its state, or it was not
+/// in the run that was interrupted (an output added at the resume, such as a recording).
 fn carry_over(
-    saved: Option<&Carried>,
-    (kind, name): (&str, &str),
+    items: &[ItemCheckpoint],
+    (kind, index, name): (&str, usize, &str),
     time: f64,
     restore: impl FnOnce(&[u8]) -> Result<(), String>,
     partial: &mut Vec<String>,
 ) -> Result<(), String> {
-    match saved {
+    let saved = items
+        .iter()
+        .find(|i| i.kind == kind && i.index == index && i.name == name);
+    match saved.map(|i| &i.carried) {
         None => partial.push(format!(
             "the {name} {kind} was added when the run resumed at t = {time} s: it holds only what came after"
         )),

@@ -42,6 +42,17 @@ pub trait Progress: Send {
     }
 }
 
+/// Stops a run after the given step, as a signal would (checkpoint, `interrupted` summary):
+/// a driver's own interruption, as the resume tests make.
+pub struct StopAfter(pub u64);
+
+impl Progress for StopAfter {
+    fn step(&mut self, _clock: &Clock) {}
+    fn stop(&mut self, clock: &Clock) -> bool {
+        clock.step == self.0
+    }
+}
+
 impl<F: FnMut(&Clock) + Send> Progress for F {
     fn step(&mut self, clock: &Clock) {
         self(clock)

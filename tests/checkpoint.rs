@@ -137,16 +137,6 @@ impl regolith::Plugin for TallyPlugin {
     }
 }
 
-/// Stops a run after step `at`, as a signal would.
-struct StopAt(u64);
-
-impl regolith::run::Progress for StopAt {
-    fn step(&mut self, _clock: &regolith::sim::Clock) {}
-    fn stop(&mut self, clock: &regolith::sim::Clock) -> bool {
-        clock.step == self.0
-    }
-}
-
 /// Nothing silent (issue 35): an output that cannot carry its state over a resume, and one
 /// first asked for at the resume, make the resumed run's summary say it is partial and why;
 /// a run never interrupted is not.
@@ -187,7 +177,13 @@ fn a_resume_past_an_output_without_state_is_marked_partial() {
     assert_eq!(summary(&straight)["partial"], false);
 
     let cut = dir.path().join("cut");
-    let stopped = run_scene(&scene, &from, &cut, CheckpointEvery(None), &mut StopAt(4));
+    let stopped = run_scene(
+        &scene,
+        &from,
+        &cut,
+        CheckpointEvery(None),
+        &mut regolith::run::StopAfter(4),
+    );
     assert!(matches!(
         stopped,
         Err(regolith::error::Error::Interrupted { .. })

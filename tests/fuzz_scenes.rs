@@ -239,16 +239,6 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>) {
     (text, sets)
 }
 
-/// Stops a run after step `at`, as a signal would.
-struct StopAt(u64);
-
-impl regolith::run::Progress for StopAt {
-    fn step(&mut self, _clock: &regolith::sim::Clock) {}
-    fn stop(&mut self, clock: &regolith::sim::Clock) -> bool {
-        clock.step == self.0
-    }
-}
-
 /// The run's status and each body's `state_hash`, from its summary.
 fn outcome(dir: &std::path::Path) -> (String, Vec<String>) {
     let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
@@ -293,7 +283,7 @@ fn load_and_run(k: &[usize]) -> bool {
                 &from,
                 out,
                 regolith::run::CheckpointEvery(None),
-                &mut StopAt(at),
+                &mut regolith::run::StopAfter(at),
             ),
         })
     };

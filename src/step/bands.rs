@@ -108,12 +108,7 @@ impl Bands {
     }
 
     pub fn count(&self) -> usize {
-        self.start.len().saturating_sub(1)
-    }
-
-    /// The grid's bands, as of the last rebuild.
-    pub fn layout(&self) -> &BandLayout {
-        &self.layout
+        self.layout.count()
     }
 
     /// The nodes band `b` may scatter to on `grid` (module docs).

@@ -7,19 +7,8 @@ use std::sync::Arc;
 
 use regolith::error::Error;
 use regolith::registry::Registries;
-use regolith::run::{CheckpointEvery, Progress, Provenance, resume_run, run_scene};
+use regolith::run::{CheckpointEvery, Provenance, StopAfter, resume_run, run_scene};
 use regolith::scene::Scene;
-use regolith::sim::Clock;
-
-/// Stops a run after step `at` as a signal would (`None`: runs to the end).
-struct StopAt(Option<u64>);
-
-impl Progress for StopAt {
-    fn step(&mut self, _clock: &Clock) {}
-    fn stop(&mut self, clock: &Clock) -> bool {
-        self.0 == Some(clock.step)
-    }
-}
 
 /// The summary fields that measure the run's machine and wall clock, not its results.
 const MACHINE: [&str; 5] = [
@@ -43,7 +32,14 @@ fn run(
         text: &text,
         overrides: sets,
     };
-    run_scene(&scene, &from, out, CheckpointEvery(None), &mut StopAt(stop)).map(|_| ())
+    run_scene(
+        &scene,
+        &from,
+        out,
+        CheckpointEvery(None),
+        &mut StopAfter(stop.unwrap_or(u64::MAX)),
+    )
+    .map(|_| ())
 }
 
 fn summary(dir: &Path) -> serde_json::Value {
@@ -113,7 +109,7 @@ pub fn check(file: &Path, registries: &Arc<Registries>, budget: Option<f64>) -> 
             &cut,
             CheckpointEvery(None),
             |_| Ok(()),
-            &mut StopAt(stop),
+            &mut StopAfter(stop.unwrap_or(u64::MAX)),
         )
         .map(|_| ())
     };

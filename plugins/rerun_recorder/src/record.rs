@@ -167,12 +167,12 @@ impl Recorder {
         if let Some(path) = path {
             let (sink, storage) = BinaryStreamSink::new(stream.clone());
             sinks.push(Box::new(sink));
-            let file = open_file(&path, self.resume_from.take())?;
+            let (file, written) = open_file(&path, self.resume_from.take())?;
             self.file = Some(RecordingFile {
                 path,
-                written: file.1,
-                file: file.0,
+                file,
                 storage,
+                written,
             });
         }
         if self.params.spawn {
