@@ -18,6 +18,7 @@ pub mod error;
 pub mod fill;
 pub mod geometry;
 pub mod grid;
+pub mod grid_field;
 pub mod linefit;
 pub mod material;
 pub mod output;

@@ -22,6 +22,7 @@ use crate::geometry::intruder::TippedIntruder;
 use crate::material::MaterialSpec;
 use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
+use crate::material::nonlocal::Nonlocal;
 use crate::output::Output;
 use crate::output::flow_field::FlowField;
 use crate::output::free_surface::FreeSurface;
@@ -48,6 +49,7 @@ impl Plugin for DefaultPlugins {
         app.register::<dyn MaterialSpec, LinearElastic>()
             .register::<dyn MaterialSpec, MuI>()
             .register::<dyn MaterialSpec, DruckerPrager>()
+            .register::<dyn MaterialSpec, Nonlocal>()
             .register::<dyn Shape, Rectangle>()
             .register::<dyn Shape, Disc>()
             .register::<dyn Shape, Polygon>()

@@ -46,11 +46,12 @@ fn stress_from(p: f64, ratio: f64, dir: [f64; 3]) -> Stress {
     dev.scaled(k) + Stress::isotropic(p)
 }
 
-fn step(l: DMat2, dt: f64, density: f64) -> PointStep {
+fn step(l: DMat2, dt: f64, density: f64) -> PointStep<'static> {
     PointStep {
         velocity_gradient: l,
         dt,
         density,
+        fields: &[],
     }
 }
 

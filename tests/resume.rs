@@ -36,3 +36,19 @@ fn a_pressure_front_resumed_twice_is_the_uninterrupted_front() {
     let (steps, _) = resume::check(&scene, &registries, None);
     assert!(steps > 100, "{steps} steps");
 }
+
+/// A nonlocal-fluidity run (the chute with `Nonlocal` for `MuI`) resumed twice is bitwise the
+/// run never interrupted: the fluidity is carried in the material history, which the
+/// checkpoint saves, and the grid field is rebuilt from it every step (issue 36).
+#[test]
+fn a_nonlocal_fluidity_run_resumed_twice_is_the_uninterrupted_run() {
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let text = std::fs::read_to_string(scenes.join("chute_flow.ron")).unwrap();
+    assert!(text.contains("material: MuI("));
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("chute_nonlocal.ron");
+    std::fs::write(&file, text.replace("material: MuI(", "material: Nonlocal(")).unwrap();
+    let registries = Regolith::default().registries();
+    let (steps, files) = resume::check(&file, &registries, Some(budget()));
+    assert!(steps > 100 && files > 2, "{steps} steps, {files} files");
+}

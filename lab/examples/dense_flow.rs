@@ -11,7 +11,7 @@
 //! profile error, rms speed normal to the bed), the last at the end of the run; every run is at the default numerical settings
 //! unless `--set` says otherwise.
 
-use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, ps1, run};
+use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, Steady, ps1, run};
 
 fn list(arg: &str) -> Vec<f64> {
     arg.split(',')
@@ -66,7 +66,7 @@ fn main() {
                 per_depth as usize,
                 end,
                 &sets,
-                profile.as_ref(),
+                profile.as_ref().map(|b| b as &dyn Steady),
                 every,
                 row,
             );

@@ -14,7 +14,9 @@
 //! and the collapses depend on the time step; until one setting does both, these tests say
 //! which transfer holds a dense flow, and the issue stays open.
 
-use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration, ps1, run};
+use regolith_lab::verify::chute::{
+    Bagnold, ChuteState, DEPTH, Steady, least_acceleration, ps1, run,
+};
 
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth) and APIC, run
 /// for `end` seconds from the lithostatic state, moving with `profile` if given; `each`
@@ -22,7 +24,7 @@ use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, least_acceleration
 fn run_chute(
     deg: f64,
     end: f64,
-    profile: Option<&Bagnold>,
+    profile: Option<&dyn Steady>,
     each: impl FnMut(f64, &ChuteState),
 ) -> u64 {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");

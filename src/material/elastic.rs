@@ -1,5 +1,5 @@
 //! Linear hypoelastic solid: the Jaumann-rate law with constant moduli, no yield and no
-//! density cut-off (the paper's intruder; docs/model.md §4.2).
+//! density cut-off (the paper's intruder; docs/model.md §4.3).
 
 use serde::Deserialize;
 

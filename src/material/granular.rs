@@ -160,7 +160,7 @@ fn resolve_elastic_and_density(
     Ok((shear, bulk, critical_density))
 }
 
-fn check_positive(name: &str, v: f64, unit: &str) -> Result<(), String> {
+pub(super) fn check_positive(name: &str, v: f64, unit: &str) -> Result<(), String> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
@@ -183,55 +183,80 @@ fn check_friction(mu_s: f64) -> Result<(), String> {
 #[serde(try_from = "MuIParams")]
 pub struct MuI(pub TransPhase);
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MuIParams {
-    youngs_modulus: Option<f64>,
-    poisson_ratio: Option<f64>,
-    bulk_modulus: Option<f64>,
-    shear_modulus: Option<f64>,
-    grain_density: f64,
-    critical_density: Option<f64>,
-    packing_fraction: Option<f64>,
-    grain_diameter: f64,
-    mu_s: f64,
-    mu_2: f64,
-    i_0: f64,
+/// Declares a scene parameter struct `$name` with the fields of `MuI` (elasticity, densities,
+/// grain size, mu(I)) and the extra ones given, and its `trans_phase()`, which checks and
+/// resolves the shared ones; a material built on the trans-phase model (`nonlocal`) reads its
+/// parameters through it, so that `MuI`'s names and checks are written once.
+macro_rules! trans_phase_params {
+    ($name:ident { $($(#[$meta:meta])* $field:ident: $ty:ty),* $(,)? }) => {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct $name {
+            youngs_modulus: Option<f64>,
+            poisson_ratio: Option<f64>,
+            bulk_modulus: Option<f64>,
+            shear_modulus: Option<f64>,
+            grain_density: f64,
+            critical_density: Option<f64>,
+            packing_fraction: Option<f64>,
+            grain_diameter: f64,
+            mu_s: f64,
+            mu_2: f64,
+            i_0: f64,
+            $($(#[$meta])* $field: $ty),*
+        }
+
+        impl $name {
+            /// The shared parameters, checked (`mu_2 >= mu_s`).
+            fn trans_phase(&self) -> Result<$crate::material::granular::TransPhase, String> {
+                $crate::material::granular::resolve_trans_phase(
+                    [self.youngs_modulus, self.poisson_ratio, self.bulk_modulus, self.shear_modulus],
+                    self.critical_density,
+                    self.packing_fraction,
+                    [self.grain_density, self.grain_diameter, self.mu_s, self.mu_2, self.i_0],
+                )
+            }
+        }
+    };
 }
+pub(super) use trans_phase_params;
+
+/// The trans-phase parameters from the elasticity (`[E, nu, K, G]`, one pair), the critical
+/// density or packing fraction, and `[rho_s, d, mu_s, mu_2, I_0]`, checked.
+pub(super) fn resolve_trans_phase(
+    moduli: [Option<f64>; 4],
+    critical: Option<f64>,
+    packing: Option<f64>,
+    [grain_density, grain_diameter, mu_s, mu_2, i_0]: [f64; 5],
+) -> Result<TransPhase, String> {
+    let (shear, bulk, critical_density) =
+        resolve_elastic_and_density(moduli, critical, packing, Some(grain_density))?;
+    check_positive("grain_diameter", grain_diameter, "m")?;
+    check_friction(mu_s)?;
+    if !(mu_2.is_finite() && mu_2 >= mu_s) {
+        return Err(format!(
+            "mu_2 must be a number no smaller than mu_s = {mu_s}, got {mu_2}"
+        ));
+    }
+    check_positive("i_0", i_0, "dimensionless")?;
+    Ok(TransPhase {
+        shear,
+        bulk,
+        critical_density,
+        grain_density,
+        grain_diameter,
+        mu_s,
+        mu_2,
+        i_0,
+    })
+}
+
+trans_phase_params!(MuIParams {});
 
 impl TryFrom<MuIParams> for MuI {
     type Error = String;
     fn try_from(p: MuIParams) -> Result<Self, String> {
-        let (shear, bulk, critical_density) = resolve_elastic_and_density(
-            [
-                p.youngs_modulus,
-                p.poisson_ratio,
-                p.bulk_modulus,
-                p.shear_modulus,
-            ],
-            p.critical_density,
-            p.packing_fraction,
-            Some(p.grain_density),
-        )?;
-        check_positive("grain_diameter", p.grain_diameter, "m")?;
-        check_friction(p.mu_s)?;
-        if !(p.mu_2.is_finite() && p.mu_2 >= p.mu_s) {
-            return Err(format!(
-                "mu_2 must be a number no smaller than mu_s = {}, got {}",
-                p.mu_s, p.mu_2
-            ));
-        }
-        check_positive("i_0", p.i_0, "dimensionless")?;
-        Ok(MuI(TransPhase {
-            shear,
-            bulk,
-            critical_density,
-            grain_density: p.grain_density,
-            grain_diameter: p.grain_diameter,
-            mu_s: p.mu_s,
-            mu_2: p.mu_2,
-            i_0: p.i_0,
-        }))
+        p.trans_phase().map(MuI)
     }
 }
 

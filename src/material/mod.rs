@@ -7,6 +7,7 @@
 
 pub mod elastic;
 pub mod granular;
+pub mod nonlocal;
 
 use std::fmt::Debug;
 
@@ -18,6 +19,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points};
+use crate::grid_field::{GridFields, PointFields};
 use crate::registry::{DynItem, Item};
 use crate::resources::Clock;
 use crate::step::{Core, MaterialUpdates, StepSet};
@@ -25,13 +27,16 @@ use crate::stress::Stress;
 
 /// What the constitutive update of one point sees.
 #[derive(Clone, Copy, Debug)]
-pub struct PointStep {
+pub struct PointStep<'a> {
     /// Velocity gradient of this step.
     pub velocity_gradient: DMat2,
     pub dt: f64,
     /// Current mass density with the volume already updated this step: the point's `m/V`,
     /// or the mean over its cell with cell-averaged dilatation.
     pub density: f64,
+    /// The values of the material's grid fields at the point, in the order of
+    /// [`Material::point_fields`] (empty for a material without any; `crate::grid_field`).
+    pub fields: &'a [f64],
 }
 
 /// A material model: an [`Item`] (its scene name and parameter checks) that implements
@@ -55,6 +60,25 @@ pub trait Material: Item {
     fn inertial_scale(&self) -> Option<f64> {
         None
     }
+    /// Whether steps of at most `max_dt` (s) on cells of `cell_size` (m) suit this material
+    /// (the scene check asks, before a run); by default any do.
+    fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {
+        Ok(())
+    }
+    /// A sentence on a known weakness of this material at `points_per_cell` points per cell
+    /// along each axis, for the scene check's warnings; none by default.
+    fn warning(&self, _points_per_cell: usize) -> Option<String> {
+        None
+    }
+    /// The per-point values of grid fields this material reads in [`Material::update`]
+    /// (`PointStep::fields`), which the systems of [`Material::add_field_systems`] fill;
+    /// none by default.
+    fn point_fields() -> &'static [&'static str] {
+        &[]
+    }
+    /// Adds the systems that fill [`Material::point_fields`] each step (`crate::grid_field`
+    /// says where they go); none by default.
+    fn add_field_systems(_schedule: &mut Schedule) {}
     /// Advances one point's stress and history over one step; returns the point's plastic
     /// shear strain rate and phase.
     fn update(
@@ -81,6 +105,8 @@ pub trait MaterialSpec: DynItem {
     fn lithostatic_ratio(&self) -> f64;
     fn initial_volume(&self, mass: f64, stress: &Stress) -> f64;
     fn inertial_scale(&self) -> Option<f64>;
+    fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String>;
+    fn warning(&self, points_per_cell: usize) -> Option<String>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
     /// Adds this material's update system (called once per material type in a scene).
@@ -111,13 +137,26 @@ impl<M: Material> MaterialSpec for M {
     fn inertial_scale(&self) -> Option<f64> {
         Material::inertial_scale(self)
     }
+    fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
+        Material::check_step(self, cell_size, max_dt)
+    }
+    fn warning(&self, points_per_cell: usize) -> Option<String> {
+        Material::warning(self, points_per_cell)
+    }
     fn attach(&self, entity: &mut EntityWorldMut, points: usize) {
         entity.insert(MaterialState::<M> {
             params: self.clone(),
             history: vec![M::History::default(); points],
         });
+        if !M::point_fields().is_empty() {
+            entity.insert((
+                PointFields::new(M::point_fields(), points),
+                GridFields::default(),
+            ));
+        }
     }
     fn add_systems(&self, schedule: &mut Schedule) {
+        M::add_field_systems(schedule);
         schedule.add_systems(
             update_stress::<M>
                 .in_set(Core(StepSet::ConstitutiveUpdate))
@@ -162,10 +201,15 @@ pub struct MaterialState<M: Material> {
 /// The constitutive update of every body made of `M` (docs/model.md §2, step 7).
 pub fn update_stress<M: Material>(
     clock: Res<Clock>,
-    mut bodies: Query<(&mut Points, &mut PointStates, &mut MaterialState<M>)>,
+    mut bodies: Query<(
+        &mut Points,
+        &mut PointStates,
+        &mut MaterialState<M>,
+        Option<&PointFields>,
+    )>,
 ) {
     let dt = clock.dt;
-    for (mut points, mut states, mut state) in &mut bodies {
+    for (mut points, mut states, mut state, fields) in &mut bodies {
         // The stress update never moves a point, so it leaves `Points` unmarked: the cells
         // found after this step's move stay current for the next step (`step::Location`).
         let points = points.bypass_change_detection();
@@ -185,12 +229,14 @@ pub fn update_stress<M: Material>(
                     .zip(states.plastic_strain.par_iter_mut())
                     .zip(states.phase.par_iter_mut()),
             )
+            .enumerate()
             .for_each(
-                |((((stress, history), &l), &density), ((rate, strain), phase))| {
+                |(k, ((((stress, history), &l), &density), ((rate, strain), phase)))| {
                     let step = PointStep {
                         velocity_gradient: l,
                         dt,
                         density,
+                        fields: fields.map_or(&[], |f| f.row(k)),
                     };
                     let outcome = params.update(stress, history, &step);
                     *rate = outcome.plastic_strain_rate;

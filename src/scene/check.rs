@@ -81,6 +81,11 @@ impl Scene {
             );
         }
         w.extend(self.resolution_warnings());
+        w.extend(self.bodies.iter().filter_map(|b| {
+            b.material
+                .warning(b.points_per_cell)
+                .map(|m| format!("body \"{}\": {m}", b.name))
+        }));
         w
     }
 
@@ -373,6 +378,13 @@ impl Scene {
                     dmax.x,
                     dmax.y
                 ));
+            }
+            let max_dt = match self.time.step {
+                TimeStep::Fixed(dt) => dt,
+                TimeStep::Cfl(c) => c * grid.cell_size / b.material.wave_speed(),
+            };
+            if let Err(e) = b.material.check_step(grid.cell_size, max_dt) {
+                return err(e);
             }
             let spacing = grid.cell_size / b.points_per_cell as f64;
             let span = (hi.min(dmax) - lo.max(dmin)).max(DVec2::ZERO) / spacing;

@@ -6,7 +6,7 @@
 //! cell-averaged dilatation, stress trace and density), `grid_update` (walls) and `bands`
 //! (the lock-free parallel scatter).
 
-mod bands;
+pub(crate) mod bands;
 pub mod cell_average;
 mod grid_update;
 mod locate;

@@ -75,6 +75,26 @@ impl Bagnold {
     }
 }
 
+/// A steady down-slope velocity profile to start a layer on and measure it against.
+pub trait Steady {
+    /// The layer's depth (m).
+    fn depth(&self) -> f64;
+    /// Down-slope speed at height `y` above the base (m/s).
+    fn speed(&self, y: f64) -> f64;
+    fn surface_speed(&self) -> f64 {
+        self.speed(self.depth())
+    }
+}
+
+impl Steady for Bagnold {
+    fn depth(&self) -> f64 {
+        self.depth
+    }
+    fn speed(&self, y: f64) -> f64 {
+        Bagnold::speed(self, y)
+    }
+}
+
 /// `g (sin th - mu_2 cos th)`: the least acceleration of a layer steeper than `atan mu_2`.
 pub fn least_acceleration(material: &TransPhase, angle: f64, gravity: f64) -> f64 {
     gravity * (angle.sin() - material.mu_2 * angle.cos())
@@ -104,7 +124,7 @@ pub fn start_steady(
     material: &TransPhase,
     gravity: DVec2,
     depth: f64,
-    profile: Option<&Bagnold>,
+    profile: Option<&dyn Steady>,
 ) {
     let rho = material.critical_density;
     for k in 0..points.len() {
@@ -154,7 +174,7 @@ pub fn measure(
     states: &PointStates,
     width: f64,
     cell: f64,
-    profile: Option<&Bagnold>,
+    profile: Option<&dyn Steady>,
 ) -> ChuteState {
     let n = points.len();
     if n == 0 {
@@ -175,7 +195,7 @@ pub fn measure(
         .sum::<f64>()
         / mass;
     let profile_error = profile.map(|b| {
-        let rows = (b.depth / cell).round() as usize;
+        let rows = (b.depth() / cell).round() as usize;
         let mut sums = vec![(0.0, 0usize); rows];
         for (x, v) in points.position.iter().zip(&points.velocity) {
             let r = (x.y / cell) as usize;
@@ -222,7 +242,7 @@ pub fn run(
     cells_per_depth: usize,
     end: f64,
     sets: &[String],
-    profile: Option<&Bagnold>,
+    profile: Option<&dyn Steady>,
     every: f64,
     mut each: impl FnMut(f64, &ChuteState),
 ) -> Result<u64, String> {

@@ -5,6 +5,7 @@
 //! the analytic value (and choosing a tolerance) is the caller's business.
 
 pub mod chute;
+pub mod nonlocal;
 
 use std::f64::consts::FRAC_PI_2;
 

@@ -52,7 +52,7 @@ proptest! {
         let trial = start.jaumann_elastic_trial(l, dt, shear, bulk);
         let tau_trial = trial.equivalent_shear();
         let mut s = start;
-        let step = PointStep { velocity_gradient: l, dt, density: m.density };
+        let step = PointStep { velocity_gradient: l, dt, density: m.density, fields: &[] };
         let out = m.update(&mut s, &mut (), &step);
         let tau = s.equivalent_shear();
         let scale = 1.0 + tau_trial + yield_stress;
@@ -94,7 +94,7 @@ proptest! {
         let (shear, bulk) = moduli(m.youngs_modulus, m.poisson_ratio);
         let tau_trial = start.jaumann_elastic_trial(l, dt, shear, bulk).equivalent_shear();
         let mut s = start;
-        let step = PointStep { velocity_gradient: l, dt, density: m.density };
+        let step = PointStep { velocity_gradient: l, dt, density: m.density, fields: &[] };
         m.update(&mut s, &mut (), &step);
         let bound = yield_stress
             + eta * tau_trial / (shear * dt)

@@ -1,0 +1,417 @@
+//! Grid fields: scalar fields that live on a body's nodes for part of a step, for materials
+//! and plugins whose law needs a spatial operator (a diffusion, a gradient) of a quantity the
+//! points carry. The nonlocal granular fluidity (`material::nonlocal`) is built on it; a
+//! temperature, a pore pressure or a damage field would be built the same way.
+//!
+//! The points carry the field's state (in their material history, which the checkpoint
+//! saves); the grid only holds it long enough to apply an operator. A step of a grid field is:
+//!
+//! 1. [`scatter`]: each point hands the nodes of its footprint a weight and a value; a node's
+//!    value is the weighted mean `sum S w_p v_p / sum S w_p`. A node no point reaches (zero
+//!    weight) is *inactive*: it is outside the material. Weighting by volume makes the nodal
+//!    value a mean over the material, which does not fall off at a free surface or depend on
+//!    the number of points per cell (an unnormalised sum would do both).
+//! 2. An operator on the nodes: [`laplacian`] (5 points, second order), with a condition per
+//!    wall ([`NodeCondition`]): a fixed value on the wall's nodes, or zero flux. Next to an
+//!    inactive node, the operator reflects the field through the node (`v_{i+1} = v_{i-1}`):
+//!    zero flux across the material's edge, placed at its last active node.
+//! 3. [`gather`]: the result interpolated back to each point with its footprint, into a
+//!    column of the body's [`PointFields`], which the constitutive update hands to
+//!    [`crate::material::Material::update`] as `PointStep::fields`.
+//!
+//! All three run in the `ParticleToGrid` set, after its core systems: the footprints and the
+//! bands of the lock-free scatter then describe the points where they stand at the start of
+//! the step, as they do for the stress's divergence. A material declares the columns it reads
+//! ([`crate::material::Material::point_fields`]) and adds the system that fills them
+//! ([`crate::material::Material::add_field_systems`]).
+
+use bevy_ecs::prelude::*;
+use rayon::prelude::*;
+
+use crate::grid::GridGeometry;
+use crate::step::bands::Shared;
+use crate::step::{Bands, Location};
+
+/// One scalar on every node of a body's grid: the scatter's weights and the weighted means.
+#[derive(Clone, Debug, Default)]
+pub struct NodalScalar {
+    /// `sum S w_p`: zero at inactive nodes.
+    pub weight: Vec<f64>,
+    /// The weighted mean of the points' values (zero at inactive nodes).
+    pub value: Vec<f64>,
+}
+
+impl NodalScalar {
+    /// Whether node `n` received any weight.
+    #[inline]
+    pub fn active(&self, n: usize) -> bool {
+        self.weight[n] > 0.0
+    }
+
+    fn reset(&mut self, nodes: usize) {
+        for v in [&mut self.weight, &mut self.value] {
+            v.clear();
+            v.resize(nodes, 0.0);
+        }
+    }
+}
+
+/// A body's named nodal scalars (component), kept between steps only to reuse their storage.
+#[derive(Component, Clone, Debug, Default)]
+pub struct GridFields {
+    fields: Vec<(&'static str, NodalScalar)>,
+}
+
+impl GridFields {
+    /// The field called `name`, created empty the first time.
+    pub fn field_mut(&mut self, name: &'static str) -> &mut NodalScalar {
+        let k = match self.fields.iter().position(|(n, _)| *n == name) {
+            Some(k) => k,
+            None => {
+                self.fields.push((name, NodalScalar::default()));
+                self.fields.len() - 1
+            }
+        };
+        &mut self.fields[k].1
+    }
+
+    /// The field called `name`, if some system has made it.
+    pub fn get(&self, name: &str) -> Option<&NodalScalar> {
+        self.fields.iter().find(|(n, _)| *n == name).map(|(_, f)| f)
+    }
+}
+
+/// Per-point values a body's material reads in its update (component): one row per point,
+/// one column per name, refilled every step by the systems of the material's grid fields.
+#[derive(Component, Clone, Debug, Default)]
+pub struct PointFields {
+    names: &'static [&'static str],
+    values: Vec<f64>,
+}
+
+impl PointFields {
+    pub fn new(names: &'static [&'static str], points: usize) -> Self {
+        PointFields {
+            names,
+            values: vec![0.0; names.len() * points],
+        }
+    }
+
+    /// The column names, in the order of each row.
+    pub fn names(&self) -> &'static [&'static str] {
+        self.names
+    }
+
+    /// Point `k`'s row.
+    #[inline]
+    pub fn row(&self, k: usize) -> &[f64] {
+        let n = self.names.len();
+        &self.values[k * n..(k + 1) * n]
+    }
+
+    /// The index of column `name`.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| *n == name)
+    }
+
+    /// Sets column `column` of every row from `value(k)`, in parallel.
+    pub fn fill(&mut self, column: usize, value: impl Fn(usize) -> f64 + Sync) {
+        let n = self.names.len();
+        assert!(column < n, "column {column} of {n}");
+        self.values
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(k, row)| row[column] = value(k));
+    }
+}
+
+/// What a wall imposes on a grid field at its nodes.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+pub enum NodeCondition {
+    /// No flux across the wall (the default at free surfaces).
+    ZeroFlux,
+    /// The field takes this value on the wall's active nodes.
+    Fixed(f64),
+}
+
+/// A condition per side of the domain; periodic sides wrap whatever is set here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldWalls {
+    pub left: NodeCondition,
+    pub right: NodeCondition,
+    pub bottom: NodeCondition,
+    pub top: NodeCondition,
+}
+
+/// Scatters a scalar from the points to the nodes: `point(p)` is the weight and value point
+/// `p` hands its footprint, or `None` for a point left out (it then makes no node active).
+/// The bands must be those the footprints were found with (`ParticleToGrid`, after
+/// `locate_points`); the scatter is parallel over bands without locks, and each node receives
+/// its contributions in the same order whatever the number of threads.
+pub fn scatter(
+    grid: &GridGeometry,
+    location: &Location,
+    bands: &Bands,
+    field: &mut NodalScalar,
+    point: impl Fn(usize) -> Option<(f64, f64)> + Sync,
+) {
+    let nodes = grid.node_count();
+    field.reset(nodes);
+    let footprints = location.footprints();
+    {
+        let weight = Shared::new(&mut field.weight);
+        let sum = Shared::new(&mut field.value);
+        bands.for_each_phase(|b| {
+            let (weight, sum) = (weight, sum);
+            let window = bands.node_window(grid, b);
+            for &p in bands.points(b) {
+                let p = p as usize;
+                let Some((w, v)) = point(p) else { continue };
+                let f = &footprints[p];
+                assert!(
+                    window.holds(f),
+                    "point {p} reaches outside the nodes of its band {b}: a grid field \
+                     scattered with bands that do not match the footprints"
+                );
+                f.for_each_entry(|n, s, _| {
+                    // SAFETY: the footprint lies in the band's window (checked above), inside
+                    // the two slices of `nodes` entries (reset above), and bands of one phase
+                    // have disjoint windows (`BandLayout::check`).
+                    unsafe {
+                        weight.add_at(n, s * w);
+                        sum.add_at(n, s * w * v);
+                    }
+                });
+            }
+        });
+    }
+    field
+        .value
+        .par_iter_mut()
+        .zip(field.weight.par_iter())
+        .for_each(|(v, &w)| {
+            if w > 0.0 {
+                *v /= w;
+            } else {
+                *v = 0.0;
+            }
+        });
+}
+
+/// Applies the walls' fixed values to the active nodes on them (periodic sides excepted);
+/// returns for each node whether it is fixed.
+fn fix_walls(grid: &GridGeometry, field: &mut NodalScalar, walls: &FieldWalls) -> Vec<bool> {
+    let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
+    let mut fixed = vec![false; nx * ny];
+    let sides = [
+        (walls.left, 0usize, true),
+        (walls.right, 0, false),
+        (walls.bottom, 1, true),
+        (walls.top, 1, false),
+    ];
+    for (condition, axis, low) in sides {
+        let NodeCondition::Fixed(value) = condition else {
+            continue;
+        };
+        if grid.periodic[axis] {
+            continue;
+        }
+        let nodes: Vec<usize> = if axis == 0 {
+            let i = if low { 0 } else { nx - 1 };
+            (0..ny).map(|j| grid.index(i, j)).collect()
+        } else {
+            let j = if low { 0 } else { ny - 1 };
+            (0..nx).map(|i| grid.index(i, j)).collect()
+        };
+        for n in nodes {
+            if field.active(n) {
+                field.value[n] = value;
+                fixed[n] = true;
+            }
+        }
+    }
+    fixed
+}
+
+/// The neighbours of node `(i, j)` along `axis` (`-1` and `+1`), wrapping on a periodic axis;
+/// `None` past a bounded edge.
+#[inline]
+fn neighbours(grid: &GridGeometry, axis: usize, i: usize, j: usize) -> [Option<usize>; 2] {
+    let count = grid.nodes_along(axis);
+    let at = |k: usize| {
+        if axis == 0 {
+            grid.index(k, j)
+        } else {
+            grid.index(i, k)
+        }
+    };
+    let k = if axis == 0 { i } else { j };
+    let periodic = grid.periodic[axis];
+    let below = if k > 0 {
+        Some(at(k - 1))
+    } else if periodic {
+        Some(at(count - 1))
+    } else {
+        None
+    };
+    let above = if k + 1 < count {
+        Some(at(k + 1))
+    } else if periodic {
+        Some(at(0))
+    } else {
+        None
+    };
+    [below, above]
+}
+
+/// The 5-point Laplacian of `field` on its active nodes (zero on inactive ones), into `out`,
+/// after fixing the walls' values on `field` (which it changes).
+///
+/// Along each axis `(v_- - 2 v + v_+)/h^2`, where a neighbour that is inactive or past a
+/// bounded edge takes the value of the opposite one (zero flux through the node; both
+/// missing: no curvature along that axis). On a wall's fixed nodes the Laplacian is
+/// extrapolated linearly from the next two nodes inward (`2 L_1 - L_2`, second order), so a
+/// point between the wall and the first inner node sees the field's curvature there.
+pub fn laplacian(
+    grid: &GridGeometry,
+    field: &mut NodalScalar,
+    walls: &FieldWalls,
+    out: &mut Vec<f64>,
+) {
+    let fixed = fix_walls(grid, field, walls);
+    let field = &*field;
+    let nx = grid.nodes_along(0);
+    let inv_h2 = 1.0 / (grid.cell_size * grid.cell_size);
+    out.clear();
+    out.resize(grid.node_count(), 0.0);
+    out.par_chunks_mut(nx).enumerate().for_each(|(j, row)| {
+        for (i, l) in row.iter_mut().enumerate() {
+            let n = grid.index(i, j);
+            if !field.active(n) || fixed[n] {
+                continue;
+            }
+            let v = field.value[n];
+            let mut sum = 0.0;
+            for axis in 0..2 {
+                let live = |m: Option<usize>| m.filter(|&m| field.active(m));
+                let [a, b] = neighbours(grid, axis, i, j).map(live);
+                let (va, vb) = match (a, b) {
+                    (Some(a), Some(b)) => (field.value[a], field.value[b]),
+                    (Some(a), None) => (field.value[a], field.value[a]),
+                    (None, Some(b)) => (field.value[b], field.value[b]),
+                    (None, None) => (v, v),
+                };
+                sum += va - 2.0 * v + vb;
+            }
+            *l = sum * inv_h2;
+        }
+    });
+    // Fixed nodes: extrapolate from the two nodes inward, along the wall's normal.
+    let (nxn, nyn) = (grid.nodes_along(0), grid.nodes_along(1));
+    for j in 0..nyn {
+        for i in 0..nxn {
+            let n = grid.index(i, j);
+            if !fixed[n] {
+                continue;
+            }
+            let inward = |step: usize| -> Option<usize> {
+                let (ii, jj) = if i == 0 && !grid.periodic[0] {
+                    (Some(i + step), Some(j))
+                } else if i == nxn - 1 && !grid.periodic[0] {
+                    (i.checked_sub(step), Some(j))
+                } else if j == 0 {
+                    (Some(i), Some(j + step))
+                } else {
+                    (Some(i), j.checked_sub(step))
+                };
+                match (ii, jj) {
+                    (Some(a), Some(b)) if a < nxn && b < nyn => Some(grid.index(a, b)),
+                    _ => None,
+                }
+            };
+            let inner = |m: Option<usize>| m.filter(|&m| field.active(m) && !fixed[m]);
+            out[n] = match (inner(inward(1)), inner(inward(2))) {
+                (Some(a), Some(b)) => 2.0 * out[a] - out[b],
+                (Some(a), None) => out[a],
+                _ => 0.0,
+            };
+        }
+    }
+}
+
+/// Interpolates a nodal scalar to every point with its footprint: `sum S nodal`.
+pub fn gather(location: &Location, nodal: &[f64], k: usize) -> f64 {
+    let mut sum = 0.0;
+    location.footprints()[k].for_each_entry(|n, s, _| sum += s * nodal[n]);
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::*;
+
+    fn line(cells: usize, h: f64, periodic_x: bool) -> GridGeometry {
+        GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: h,
+            cells: [cells, 1],
+            periodic: [periodic_x, true],
+        }
+    }
+
+    fn field_of(values: Vec<f64>) -> NodalScalar {
+        NodalScalar {
+            weight: vec![1.0; values.len()],
+            value: values,
+        }
+    }
+
+    const OPEN: FieldWalls = FieldWalls {
+        left: NodeCondition::ZeroFlux,
+        right: NodeCondition::ZeroFlux,
+        bottom: NodeCondition::ZeroFlux,
+        top: NodeCondition::ZeroFlux,
+    };
+
+    #[test]
+    fn the_laplacian_of_a_quadratic_is_exact_inside_and_reflects_at_the_edges() {
+        let grid = line(10, 0.5, false);
+        let x = |i: usize| i as f64 * 0.5;
+        let mut f = field_of((0..11).map(|i| 3.0 * x(i) * x(i) - x(i)).collect());
+        let mut out = Vec::new();
+        laplacian(&grid, &mut f, &OPEN, &mut out);
+        for (i, l) in out.iter().enumerate().take(10).skip(1) {
+            assert!((l - 6.0).abs() < 1e-12, "node {i}: {l}");
+        }
+        // Reflected through the end nodes: (2 v_1 - 2 v_0)/h^2.
+        let h2 = 0.25;
+        assert!((out[0] - 2.0 * (f.value[1] - f.value[0]) / h2).abs() < 1e-12);
+        // An inactive node acts as the edge.
+        f.weight[6] = 0.0;
+        laplacian(&grid, &mut f, &OPEN, &mut out);
+        assert_eq!(out[6], 0.0);
+        assert!((out[5] - 2.0 * (f.value[4] - f.value[5]) / h2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_fixed_wall_sets_its_nodes_and_extrapolates_the_laplacian() {
+        let grid = line(8, 1.0, false);
+        let mut f = field_of((0..9).map(|i| (i * i) as f64).collect());
+        let walls = FieldWalls {
+            left: NodeCondition::Fixed(0.0),
+            ..OPEN
+        };
+        let mut out = Vec::new();
+        laplacian(&grid, &mut f, &walls, &mut out);
+        assert_eq!(f.value[0], 0.0);
+        assert!((out[0] - 2.0).abs() < 1e-12 && (out[3] - 2.0).abs() < 1e-12);
+        // A periodic axis ignores its walls' conditions and wraps.
+        let ring = line(8, 1.0, true);
+        let mut f = field_of((0..8).map(|i| (i as f64).sin()).collect());
+        laplacian(&ring, &mut f, &walls, &mut out);
+        let expected = (7f64.sin() - 2.0 * 0f64.sin() + 1f64.sin()) / 1.0;
+        assert!((out[0] - expected).abs() < 1e-12);
+    }
+}
