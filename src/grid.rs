@@ -45,6 +45,18 @@ impl GridGeometry {
         j * self.nodes_along(0) + i
     }
 
+    /// The nodes on one side, in order: along `axis` 0 the left (`low`) or right column, along
+    /// 1 the bottom or top row.
+    pub fn side_nodes(&self, axis: usize, low: bool) -> impl Iterator<Item = usize> + use<> {
+        let (nx, ny) = (self.nodes_along(0), self.nodes_along(1));
+        let (count, first, stride) = if axis == 0 {
+            (ny, if low { 0 } else { nx - 1 }, nx)
+        } else {
+            (nx, if low { 0 } else { (ny - 1) * nx }, 1)
+        };
+        (0..count).map(move |k| first + k * stride)
+    }
+
     /// Position of node `(i, j)`.
     pub fn node_position(&self, i: usize, j: usize) -> DVec2 {
         self.origin + DVec2::new(i as f64, j as f64) * self.cell_size

@@ -74,11 +74,6 @@ impl GridFields {
         };
         &mut self.fields[k].1
     }
-
-    /// The field called `name`, if some system has made it.
-    pub fn get(&self, name: &str) -> Option<&NodalScalar> {
-        self.fields.iter().find(|(n, _)| *n == name).map(|(_, f)| f)
-    }
 }
 
 /// Per-point values a body's material reads in its update (component): one row per point,
@@ -97,21 +92,11 @@ impl PointFields {
         }
     }
 
-    /// The column names, in the order of each row.
-    pub fn names(&self) -> &'static [&'static str] {
-        self.names
-    }
-
     /// Point `k`'s row.
     #[inline]
     pub fn row(&self, k: usize) -> &[f64] {
         let n = self.names.len();
         &self.values[k * n..(k + 1) * n]
-    }
-
-    /// The index of column `name`.
-    pub fn column(&self, name: &str) -> Option<usize> {
-        self.names.iter().position(|n| *n == name)
     }
 
     /// Sets column `column` of every row from `value(k)`, in parallel.
@@ -198,11 +183,23 @@ pub fn scatter(
         });
 }
 
-/// Applies the walls' fixed values to the active nodes on them (periodic sides excepted);
-/// returns for each node whether it is fixed.
-fn fix_walls(grid: &GridGeometry, field: &mut NodalScalar, walls: &FieldWalls) -> Vec<bool> {
-    let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
-    let mut fixed = vec![false; nx * ny];
+/// A node a wall fixes, and the next two nodes inward along the wall's normal (if the grid
+/// has them).
+struct FixedNode {
+    node: usize,
+    inward: [Option<usize>; 2],
+}
+
+/// Applies the walls' fixed values to the active nodes on them (periodic sides excepted; a
+/// corner belongs to the first of left, right, bottom, top that fixes it); returns for each
+/// node whether it is fixed, and the fixed nodes.
+fn fix_walls(
+    grid: &GridGeometry,
+    field: &mut NodalScalar,
+    walls: &FieldWalls,
+) -> (Vec<bool>, Vec<FixedNode>) {
+    let mut is_fixed = vec![false; grid.node_count()];
+    let mut fixed = Vec::new();
     let sides = [
         (walls.left, 0usize, true),
         (walls.right, 0, false),
@@ -216,21 +213,23 @@ fn fix_walls(grid: &GridGeometry, field: &mut NodalScalar, walls: &FieldWalls) -
         if grid.periodic[axis] {
             continue;
         }
-        let nodes: Vec<usize> = if axis == 0 {
-            let i = if low { 0 } else { nx - 1 };
-            (0..ny).map(|j| grid.index(i, j)).collect()
-        } else {
-            let j = if low { 0 } else { ny - 1 };
-            (0..nx).map(|i| grid.index(i, j)).collect()
-        };
-        for n in nodes {
-            if field.active(n) {
-                field.value[n] = value;
-                fixed[n] = true;
+        let stride = if axis == 0 { 1 } else { grid.nodes_along(0) };
+        let along = grid.nodes_along(axis);
+        for n in grid.side_nodes(axis, low) {
+            if !field.active(n) || is_fixed[n] {
+                continue;
             }
+            field.value[n] = value;
+            is_fixed[n] = true;
+            let inward =
+                |k: usize| (k < along).then(|| if low { n + k * stride } else { n - k * stride });
+            fixed.push(FixedNode {
+                node: n,
+                inward: [inward(1), inward(2)],
+            });
         }
     }
-    fixed
+    (is_fixed, fixed)
 }
 
 /// The neighbours of node `(i, j)` along `axis` (`-1` and `+1`), wrapping on a periodic axis;
@@ -278,7 +277,7 @@ pub fn laplacian(
     walls: &FieldWalls,
     out: &mut Vec<f64>,
 ) {
-    let fixed = fix_walls(grid, field, walls);
+    let (is_fixed, fixed) = fix_walls(grid, field, walls);
     let field = &*field;
     let nx = grid.nodes_along(0);
     let inv_h2 = 1.0 / (grid.cell_size * grid.cell_size);
@@ -287,7 +286,7 @@ pub fn laplacian(
     out.par_chunks_mut(nx).enumerate().for_each(|(j, row)| {
         for (i, l) in row.iter_mut().enumerate() {
             let n = grid.index(i, j);
-            if !field.active(n) || fixed[n] {
+            if !field.active(n) || is_fixed[n] {
                 continue;
             }
             let v = field.value[n];
@@ -307,35 +306,13 @@ pub fn laplacian(
         }
     });
     // Fixed nodes: extrapolate from the two nodes inward, along the wall's normal.
-    let (nxn, nyn) = (grid.nodes_along(0), grid.nodes_along(1));
-    for j in 0..nyn {
-        for i in 0..nxn {
-            let n = grid.index(i, j);
-            if !fixed[n] {
-                continue;
-            }
-            let inward = |step: usize| -> Option<usize> {
-                let (ii, jj) = if i == 0 && !grid.periodic[0] {
-                    (Some(i + step), Some(j))
-                } else if i == nxn - 1 && !grid.periodic[0] {
-                    (i.checked_sub(step), Some(j))
-                } else if j == 0 {
-                    (Some(i), Some(j + step))
-                } else {
-                    (Some(i), j.checked_sub(step))
-                };
-                match (ii, jj) {
-                    (Some(a), Some(b)) if a < nxn && b < nyn => Some(grid.index(a, b)),
-                    _ => None,
-                }
-            };
-            let inner = |m: Option<usize>| m.filter(|&m| field.active(m) && !fixed[m]);
-            out[n] = match (inner(inward(1)), inner(inward(2))) {
-                (Some(a), Some(b)) => 2.0 * out[a] - out[b],
-                (Some(a), None) => out[a],
-                _ => 0.0,
-            };
-        }
+    let inner = |m: Option<usize>| m.filter(|&m| field.active(m) && !is_fixed[m]);
+    for f in fixed {
+        out[f.node] = match f.inward.map(inner) {
+            [Some(a), Some(b)] => 2.0 * out[a] - out[b],
+            [Some(a), None] => out[a],
+            _ => 0.0,
+        };
     }
 }
 
@@ -393,6 +370,30 @@ mod tests {
         laplacian(&grid, &mut f, &OPEN, &mut out);
         assert_eq!(out[6], 0.0);
         assert!((out[5] - 2.0 * (f.value[4] - f.value[5]) / h2).abs() < 1e-12);
+    }
+
+    /// A corner node extrapolates along the normal of the wall that fixes it, not along the
+    /// other (bounded) axis: with `v = y^2` fixed at the bottom, every bottom node's Laplacian
+    /// is the field's 2, the corners' included.
+    #[test]
+    fn a_corner_extrapolates_along_its_own_wall() {
+        let grid = GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [4, 6],
+            periodic: [false, false],
+        };
+        let (nx, ny) = (5, 7);
+        let mut f = field_of((0..nx * ny).map(|n| ((n / nx) as f64).powi(2)).collect());
+        let walls = FieldWalls {
+            bottom: NodeCondition::Fixed(0.0),
+            ..OPEN
+        };
+        let mut out = Vec::new();
+        laplacian(&grid, &mut f, &walls, &mut out);
+        for (i, l) in out.iter().take(nx).enumerate() {
+            assert!((l - 2.0).abs() < 1e-12, "bottom node {i}: {l}");
+        }
     }
 
     #[test]

@@ -224,7 +224,6 @@ fn the_return_gives_a_plastic_rate_of_g_mu() {
         let mut s = stress;
         let mut history = FluidityHistory {
             fluidity: g_n,
-            connected: true,
             seeded: true,
         };
         let step = PointStep {

@@ -49,20 +49,36 @@ impl TransPhase {
         gdp * self.grain_diameter * (self.grain_density / p).sqrt()
     }
 
+    /// The elastic trial stress of one step (`Ok`), or, below the critical density or in
+    /// tension, the disconnected phase: stress set to zero, the whole trial shear taken as
+    /// plastic (`Err`, the point's outcome). Every trans-phase flow rule starts here.
+    pub fn dense_trial(
+        &self,
+        stress: &mut Stress,
+        step: &PointStep,
+    ) -> Result<Stress, PointOutcome> {
+        let (g, dt) = (self.shear, step.dt);
+        let trial = stress.jaumann_elastic_trial(step.velocity_gradient, dt, g, self.bulk);
+        if step.density < self.critical_density || trial.pressure() <= 0.0 {
+            *stress = Stress::ZERO;
+            return Err(PointOutcome {
+                plastic_strain_rate: trial.equivalent_shear() / (g * dt),
+                phase: Phase::Disconnected,
+            });
+        }
+        Ok(trial)
+    }
+
     /// One step of the update at one point (docs/model.md §4.1, steps 1-5).
     pub fn update(&self, stress: &mut Stress, step: &PointStep) -> PointOutcome {
         let (g, dt) = (self.shear, step.dt);
-        let trial = stress.jaumann_elastic_trial(step.velocity_gradient, dt, g, self.bulk);
+        let trial = match self.dense_trial(stress, step) {
+            Ok(trial) => trial,
+            Err(disconnected) => return disconnected,
+        };
         let p = trial.pressure();
         let dev = trial.deviator();
         let tau_trial = trial.equivalent_shear();
-        if step.density < self.critical_density || p <= 0.0 {
-            *stress = Stress::ZERO;
-            return PointOutcome {
-                plastic_strain_rate: tau_trial / (g * dt),
-                phase: Phase::Disconnected,
-            };
-        }
         if tau_trial <= self.mu_s * p {
             *stress = trial;
             return PointOutcome {

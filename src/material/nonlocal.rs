@@ -35,7 +35,7 @@ use bevy_ecs::prelude::*;
 
 use super::granular::{TransPhase, check_positive, trans_phase_params};
 use super::{Material, MaterialState, PointOutcome, PointStep};
-use crate::body::{Phase, Points};
+use crate::body::{Phase, PointStates, Points};
 use crate::grid::GridGeometry;
 use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields};
 use crate::registry::Item;
@@ -157,10 +157,8 @@ impl TryFrom<NonlocalParams> for Nonlocal {
 /// A point's fluidity and what the seeding rule remembers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct FluidityHistory {
-    /// `g` (1/s).
+    /// `g` (1/s); zero on a disconnected point.
     pub fluidity: f64,
-    /// Dense at the last update (disconnected points are left out of the Laplacian).
-    pub connected: bool,
     /// Seeded, or flowing, since the trial ratio last sat at or below `mu_s`.
     pub seeded: bool,
 }
@@ -207,17 +205,12 @@ impl Nonlocal {
         std::f64::consts::FRAC_PI_2 * self.cooperativity_length(angle.tan())
     }
 
-    /// `t0 dg/dt` without the diffusion, at ratio `mu` and pressure `p`.
-    pub fn reaction(&self, mu: f64, p: f64, g: f64) -> f64 {
-        let beta = self.b() * self.base.grain_diameter * (self.base.grain_density / p).sqrt();
-        self.growth(mu) * g - beta * mu * g * g
-    }
-
     /// The fluidity after a step `dt` from `g_n`, given the diffusion `A^2 d^2 lap(g)`
     /// (explicit) and the elastic trial `tau_tr`, `p > 0`; the stress ratio is the returned
     /// one, `tau_tr/(p + gdt g)` with `gdt = G dt` (`gdt = 0`: held at `tau_tr/p`, for
     /// checking the fluidity equation alone). Solves
-    /// `F(g) = t0 (g - g_n)/dt - diffusion - reaction(mu(g), p, g) = 0` for `g >= 0`.
+    /// `F(g) = t0 (g - g_n)/dt - diffusion - growth(mu) g + b sqrt(rho_s d^2/p) mu g^2 = 0`
+    /// for `g >= 0`, `mu = mu(g)`.
     pub fn advance(&self, g_n: f64, diffusion: f64, tau_tr: f64, p: f64, gdt: f64, dt: f64) -> f64 {
         let (mu_s, mu_2) = (self.base.mu_s, self.base.mu_2);
         let beta = self.b() * self.base.grain_diameter * (self.base.grain_density / p).sqrt();
@@ -298,17 +291,15 @@ impl Nonlocal {
     ) -> PointOutcome {
         let m = &self.base;
         let (shear, dt) = (m.shear, step.dt);
-        let trial = stress.jaumann_elastic_trial(step.velocity_gradient, dt, shear, m.bulk);
+        let trial = match m.dense_trial(stress, step) {
+            Ok(trial) => trial,
+            Err(disconnected) => {
+                *history = FluidityHistory::default();
+                return disconnected;
+            }
+        };
         let p = trial.pressure();
         let tau_trial = trial.equivalent_shear();
-        if step.density < m.critical_density || p <= 0.0 {
-            *stress = Stress::ZERO;
-            *history = FluidityHistory::default();
-            return PointOutcome {
-                plastic_strain_rate: tau_trial / (shear * dt),
-                phase: Phase::Disconnected,
-            };
-        }
         let mu_trial = tau_trial / p;
         let mut g_n = history.fluidity;
         if mu_trial <= m.mu_s {
@@ -327,7 +318,6 @@ impl Nonlocal {
             g = 0.0;
         }
         history.fluidity = g;
-        history.connected = true;
         if g == 0.0 {
             *stress = trial;
             return PointOutcome {
@@ -421,6 +411,7 @@ impl Material for Nonlocal {
 type FluidityBody<'a> = (
     &'a MaterialState<Nonlocal>,
     &'a Points,
+    &'a PointStates,
     &'a Location,
     &'a Bands,
     &'a mut GridFields,
@@ -434,14 +425,14 @@ pub fn fluidity_field(
     boundaries: Res<Boundaries>,
     mut bodies: Query<FluidityBody>,
 ) {
-    for (state, points, location, bands, mut nodal, mut at_points) in &mut bodies {
+    for (state, points, states, location, bands, mut nodal, mut at_points) in &mut bodies {
         let walls = state.params.walls.resolve(&boundaries.0);
         let history = &state.history;
         let mut laplacian = std::mem::take(&mut nodal.field_mut(LAPLACIAN[0]).value);
         let fluidity = nodal.field_mut("fluidity");
         grid_field::scatter(&grid, location, bands, fluidity, |p| {
-            let h = &history[p];
-            (h.connected && points.mass[p] > 0.0).then(|| (points.volume[p], h.fluidity))
+            let dense = states.phase[p] != Phase::Disconnected && points.mass[p] > 0.0;
+            dense.then(|| (points.volume[p], history[p].fluidity))
         });
         grid_field::laplacian(&grid, fluidity, &walls, &mut laplacian);
         at_points.fill(0, |k| grid_field::gather(location, &laplacian, k));

@@ -99,7 +99,6 @@ fn constrain(field: &mut GridField, n: usize, mask: [bool; 2], dt: Option<f64>) 
 
 /// Applies the walls to the nodes on the domain's edges; `dt` as in [`constrain`].
 pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt: Option<f64>) {
-    let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
     let sides = [
         (walls.left, 0usize, true),
         (walls.right, 0, false),
@@ -111,16 +110,8 @@ pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt
         if mask == [false, false] {
             continue;
         }
-        if axis == 0 {
-            let i = if low { 0 } else { nx - 1 };
-            for j in 0..ny {
-                constrain(field, grid.index(i, j), mask, dt);
-            }
-        } else {
-            let j = if low { 0 } else { ny - 1 };
-            for i in 0..nx {
-                constrain(field, grid.index(i, j), mask, dt);
-            }
+        for n in grid.side_nodes(axis, low) {
+            constrain(field, n, mask, dt);
         }
     }
 }
