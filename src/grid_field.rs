@@ -15,17 +15,24 @@
 //!    wall ([`NodeCondition`]): a fixed value on the wall's nodes, or zero flux. Next to an
 //!    inactive node, the operator reflects the field through the node (`v_{i+1} = v_{i-1}`):
 //!    zero flux across the material's edge, placed at its last active node.
-//! 3. [`gather`]: the result interpolated back to each point with its footprint, into a
+//! 3. [`gather_active`]: the result interpolated back to each point with its footprint (over
+//!    the active nodes, renormalised), into a
 //!    column of the body's [`PointFields`], which the constitutive update hands to
 //!    [`crate::material::Material::update`] as `PointStep::fields`.
 //!
-//! All three run in the `ParticleToGrid` set, after its core systems: the footprints and the
-//! bands of the lock-free scatter then describe the points where they stand at the start of
-//! the step, as they do for the stress's divergence. A material declares the columns it reads
-//! ([`crate::material::Material::point_fields`]) and adds the system that fills them
-//! ([`crate::material::Material::add_field_systems`]).
+//! Where they run depends on what the field's law reads. A law of the point state at the
+//! start of the step runs in the `ParticleToGrid` set, after its core systems: the footprints
+//! and the bands of the lock-free scatter then describe the points where they stand. A law
+//! that reads this step's velocity gradient or density (the fluidity's, which needs the
+//! elastic trial stress) runs in `GridToParticle`, after its core systems: the footprints
+//! are still the start of the step's (the velocity gradient was gathered with them), but the
+//! bands have been rebuilt for the moved points, so such a field scatters with the bands kept
+//! from the start of the step ([`StartBands`], [`keep_start_bands`]). A material declares the
+//! columns it reads ([`crate::material::Material::point_fields`]) and adds the systems that
+//! fill them ([`crate::material::Material::add_field_systems`]).
 
 use bevy_ecs::prelude::*;
+use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
@@ -110,6 +117,21 @@ impl PointFields {
     }
 }
 
+/// A body's bands as they were when its footprints were found (component): the scatter of a
+/// field computed after the move, when [`Bands`] already describes the moved points.
+#[derive(Component, Clone, Debug, Default)]
+pub struct StartBands(pub Bands);
+
+/// Keeps the start of the step's bands of every body of material `M` ([`StartBands`]): added
+/// to `ParticleToGrid` after its core by a material whose field runs after the move.
+pub fn keep_start_bands<M: crate::material::Material>(
+    mut bodies: Query<(&Bands, &mut StartBands), With<crate::material::MaterialState<M>>>,
+) {
+    for (bands, mut kept) in &mut bodies {
+        kept.0.clone_from(bands);
+    }
+}
+
 /// What a wall imposes on a grid field at its nodes.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
 pub enum NodeCondition {
@@ -128,8 +150,20 @@ pub struct FieldWalls {
     pub top: NodeCondition,
 }
 
+/// The least weight of an active node, in units of a full node's (`h^2`, the weight of a node
+/// whose whole support is material): an eighth is the weight of a node a flat free surface
+/// lies halfway to (`f^2/2` for a surface a fraction `f` of a cell past the last full node).
+/// So the node nearest the surface is the field's last, and its zero-flux edge lies within
+/// half a cell of the surface. A node that only a sliver of material reaches (an elastic
+/// displacement of `1e-12 h` past a cell boundary) would otherwise move that edge a whole
+/// cell out: a layer 0.9 times its stopping height decayed five times too slowly
+/// (docs/VALIDATION.md, "Nonlocal granular fluidity").
+pub const FILLED: f64 = 0.125;
+
 /// Scatters a scalar from the points to the nodes: `point(p)` is the weight and value point
 /// `p` hands its footprint, or `None` for a point left out (it then makes no node active).
+/// A node whose weight stays below [`FILLED`] times `h^2` is left inactive (weight and value
+/// zero): it lies outside the material.
 /// The bands must be those the footprints were found with (`ParticleToGrid`, after
 /// `locate_points`); the scatter is parallel over bands without locks, and each node receives
 /// its contributions in the same order whatever the number of threads.
@@ -170,15 +204,16 @@ pub fn scatter(
             }
         });
     }
+    let filled = FILLED * grid.cell_size * grid.cell_size;
     field
         .value
         .par_iter_mut()
-        .zip(field.weight.par_iter())
-        .for_each(|(v, &w)| {
-            if w > 0.0 {
-                *v /= w;
+        .zip(field.weight.par_iter_mut())
+        .for_each(|(v, w)| {
+            if *w >= filled {
+                *v /= *w;
             } else {
-                *v = 0.0;
+                (*v, *w) = (0.0, 0.0);
             }
         });
 }
@@ -264,7 +299,8 @@ fn neighbours(grid: &GridGeometry, axis: usize, i: usize, j: usize) -> [Option<u
 }
 
 /// The 5-point Laplacian of `field` on its active nodes (zero on inactive ones), into `out`,
-/// after fixing the walls' values on `field` (which it changes).
+/// after fixing the walls' values on `field` (which it changes); returns for each node
+/// whether a wall fixes it.
 ///
 /// Along each axis `(v_- - 2 v + v_+)/h^2`, where a neighbour that is inactive or past a
 /// bounded edge takes the value of the opposite one (zero flux through the node; both
@@ -276,7 +312,7 @@ pub fn laplacian(
     field: &mut NodalScalar,
     walls: &FieldWalls,
     out: &mut Vec<f64>,
-) {
+) -> Vec<bool> {
     let (is_fixed, fixed) = fix_walls(grid, field, walls);
     let field = &*field;
     let nx = grid.nodes_along(0);
@@ -314,19 +350,67 @@ pub fn laplacian(
             _ => 0.0,
         };
     }
+    is_fixed
 }
 
-/// Interpolates a nodal scalar to every point with its footprint: `sum S nodal`.
-pub fn gather(location: &Location, nodal: &[f64], k: usize) -> f64 {
-    let mut sum = 0.0;
-    location.footprints()[k].for_each_entry(|n, s, _| sum += s * nodal[n]);
-    sum
+/// Interpolates nodal values to point `k` over the active nodes of its footprint alone, the
+/// weights renormalised, `sum_active S v / sum_active S`, for each array of `nodal`: a point
+/// at the material's edge then sees the field extended at zero gradient past its last active
+/// node, not pulled towards the zero an inactive node holds. `None` if no node of the
+/// footprint is active.
+pub fn gather_active<const N: usize>(
+    location: &Location,
+    field: &NodalScalar,
+    nodal: [&[f64]; N],
+    k: usize,
+) -> Option<[f64; N]> {
+    let mut sum = [0.0; N];
+    let mut weight = 0.0;
+    location.footprints()[k].for_each_entry(|n, s, _| {
+        if field.active(n) {
+            weight += s;
+            for (sum, values) in sum.iter_mut().zip(&nodal) {
+                *sum += s * values[n];
+            }
+        }
+    });
+    (weight > 0.0).then(|| sum.map(|s| s / weight))
+}
+
+/// The value at the centre of the cell holding `x`: the mean of `nodal` over the cell's
+/// active corner nodes (the interpolation at the centre, with linear or CPDI shape functions,
+/// renormalised like [`gather_active`]); `None` if none is active. A law that pairs the field
+/// with the velocity gradient reads it here: the gradient is constant over a cell, so a value
+/// that varies inside one would set points of one cell against each other.
+pub fn at_cell_centre(
+    grid: &GridGeometry,
+    field: &NodalScalar,
+    nodal: &[f64],
+    x: DVec2,
+) -> Option<f64> {
+    let [i, j] = grid.cell_at(x, 1.0 / grid.cell_size);
+    let next = |axis: usize, k: usize| {
+        if k + 1 == grid.nodes_along(axis) {
+            0
+        } else {
+            k + 1
+        }
+    };
+    let corners = [
+        grid.index(i, j),
+        grid.index(next(0, i), j),
+        grid.index(i, next(1, j)),
+        grid.index(next(0, i), next(1, j)),
+    ];
+    let (sum, count) = corners
+        .iter()
+        .filter(|&&n| field.active(n))
+        .fold((0.0, 0), |(s, c), &n| (s + nodal[n], c + 1));
+    (count > 0).then(|| sum / count as f64)
 }
 
 #[cfg(test)]
 mod tests {
-    use glam::DVec2;
-
     use super::*;
 
     fn line(cells: usize, h: f64, periodic_x: bool) -> GridGeometry {

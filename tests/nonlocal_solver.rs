@@ -201,8 +201,9 @@ fn a_small_mode_about_zero_grows_at_the_linear_rate() {
     assert!(rate > 0.0, "at 25 degrees a mode 64 mm long grows");
 }
 
-/// The return at the solved fluidity: `gamma_dot_p = g mu` and `tau = tau_tr - G dt gdp`,
-/// to round-off, for points below, on and above the mu(I) range.
+/// The return at the fluidity a node solves for (handed to the point as `g_hat`):
+/// `gamma_dot_p = g mu` and `tau = tau_tr - G dt gdp`, to round-off, for points below, on
+/// and above the mu(I) range, and the returned ratio below `mu_2`.
 #[test]
 fn the_return_gives_a_plastic_rate_of_g_mu() {
     let m = ps1();
@@ -226,16 +227,16 @@ fn the_return_gives_a_plastic_rate_of_g_mu() {
             fluidity: g_n,
             seeded: true,
         };
+        let (tau_tr, p) = (stress.equivalent_shear(), stress.pressure());
+        let g = m.advance_node(g_n, 0.0, tau_tr, p, dt);
         let step = PointStep {
             velocity_gradient: DMat2::ZERO,
             dt,
             density: m.base.critical_density * 1.001,
-            fields: &[0.0],
+            fields: &[g],
         };
         let out = m.update_point(&mut s, &mut history, &step);
         let tau = s.equivalent_shear();
-        let (tau_tr, p) = (stress.equivalent_shear(), stress.pressure());
-        let g = history.fluidity;
         let gdp = out.plastic_strain_rate;
         assert!(
             (gdp - g * tau / p).abs() <= 1e-12 * gdp.max(1e-300),

@@ -38,8 +38,9 @@ fn a_pressure_front_resumed_twice_is_the_uninterrupted_front() {
 }
 
 /// A nonlocal-fluidity run (the chute with `Nonlocal` for `MuI`) resumed twice is bitwise the
-/// run never interrupted: the fluidity is carried in the material history, which the
-/// checkpoint saves, and the grid field is rebuilt from it every step (issue 36).
+/// run never interrupted, on one thread and on two: the fluidity is carried in the points'
+/// material history, which the checkpoint saves, and the nodal field is rebuilt from it every
+/// step (issue 49).
 #[test]
 fn a_nonlocal_fluidity_run_resumed_twice_is_the_uninterrupted_run() {
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
@@ -49,6 +50,15 @@ fn a_nonlocal_fluidity_run_resumed_twice_is_the_uninterrupted_run() {
     let file = dir.path().join("chute_nonlocal.ron");
     std::fs::write(&file, text.replace("material: MuI(", "material: Nonlocal(")).unwrap();
     let registries = Regolith::default().registries();
-    let (steps, files) = resume::check(&file, &registries, Some(budget()));
-    assert!(steps > 100 && files > 2, "{steps} steps, {files} files");
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (steps, files) = pool.install(|| resume::check(&file, &registries, Some(budget())));
+        assert!(
+            steps > 100 && files > 2,
+            "{threads} threads: {steps} steps, {files} files"
+        );
+    }
 }

@@ -19,7 +19,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points};
-use crate::grid_field::{GridFields, PointFields};
+use crate::grid_field::{GridFields, PointFields, StartBands};
 use crate::registry::{DynItem, Item};
 use crate::resources::Clock;
 use crate::step::{Core, MaterialUpdates, StepSet};
@@ -65,11 +65,6 @@ pub trait Material: Item {
     fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {
         Ok(())
     }
-    /// A sentence on a known weakness of this material at `points_per_cell` points per cell
-    /// along each axis, for the scene check's warnings; none by default.
-    fn warning(&self, _points_per_cell: usize) -> Option<String> {
-        None
-    }
     /// The per-point values of grid fields this material reads in [`Material::update`]
     /// (`PointStep::fields`), which the systems of [`Material::add_field_systems`] fill;
     /// none by default.
@@ -106,7 +101,6 @@ pub trait MaterialSpec: DynItem {
     fn initial_volume(&self, mass: f64, stress: &Stress) -> f64;
     fn inertial_scale(&self) -> Option<f64>;
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String>;
-    fn warning(&self, points_per_cell: usize) -> Option<String>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
     /// Adds this material's update system (called once per material type in a scene).
@@ -140,9 +134,6 @@ impl<M: Material> MaterialSpec for M {
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
         Material::check_step(self, cell_size, max_dt)
     }
-    fn warning(&self, points_per_cell: usize) -> Option<String> {
-        Material::warning(self, points_per_cell)
-    }
     fn attach(&self, entity: &mut EntityWorldMut, points: usize) {
         entity.insert(MaterialState::<M> {
             params: self.clone(),
@@ -152,6 +143,7 @@ impl<M: Material> MaterialSpec for M {
             entity.insert((
                 PointFields::new(M::point_fields(), points),
                 GridFields::default(),
+                StartBands::default(),
             ));
         }
     }

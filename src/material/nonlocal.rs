@@ -9,38 +9,68 @@
 //! with `b = (mu_2 - mu_s)/I_0`, and sets the plastic shear rate, `gamma_dot_p = g mu`. At a
 //! known `g` the backward-Euler return is `tau = tau_tr p/(p + G dt g)`.
 //!
-//! How a step advances it, per body of this material:
-//! 1. `fluidity_field` (a grid field, `crate::grid_field`, in `ParticleToGrid`): each dense
-//!    point's `g` is scattered with its volume as weight, the nodal Laplacian is taken with the
-//!    walls' conditions (`g = 0` on no-slip walls, zero flux elsewhere, settable per wall), and
-//!    gathered back to the points. Disconnected points carry no fluidity and are left out.
-//! 2. The update (per point): the elastic trial, then `g` from the equation above with the
-//!    Laplacian explicit and everything else implicit, `mu` being the returned ratio
-//!    `tau_tr/(p + G dt g)` of the unknown `g`: one scalar root, found by a safeguarded
-//!    Newton iteration in a bracket (`Nonlocal::advance`). The diffusion number
-//!    `A^2 d^2 dt/(t0 h^2)` must stay below 1/4 for the explicit Laplacian; the scene check
-//!    refuses a scene whose largest step would break it.
+//! How a step advances it, per body of this material (docs/model.md §4.2). The fluidity's
+//! equation is solved on the grid's nodes, and each point carries the nodal increments, the
+//! usual treatment of a diffused field in MPM (as thermal and damage fields are):
+//! 1. `advance_fluidity` (a grid field, `crate::grid_field`, in `GridToParticle` after the
+//!    velocity gradient and the density are known): each point's elastic trial stress; the
+//!    seeding rule (below) on its `g`; the dense points' `g`, trial pressure `p` and trial
+//!    equivalent shear `tau_tr` scattered to the nodes with their volumes as weights; the
+//!    nodal Laplacian of `g` with the walls' conditions (`g = 0` on no-slip walls, zero flux
+//!    elsewhere, settable per wall); and at each free node the equation above with the
+//!    Laplacian explicit and everything else implicit, `mu` being the ratio the return will
+//!    give, `tau_tr/(p + G dt g)` of the unknown `g`: one scalar root, found by a safeguarded
+//!    Newton iteration in a bracket (`Nonlocal::advance`), so `mu` stays below `mu_2`.
+//!    Each point then adds the interpolated increment `sum N (g_new - g_old)` to its `g`
+//!    (over the active nodes, renormalised: `grid_field::gather_active`).
+//! 2. The update (per point): the elastic trial again, and the return with `g_hat`, the new
+//!    nodal fluidity at the centre of the point's cell (`grid_field::at_cell_centre`):
+//!    `tau = tau_tr p/(p + G dt g_hat)`, `gamma_dot_p = g_hat mu`. The velocity gradient is
+//!    constant over a cell, so a `g_hat` interpolated to each point would make the points of
+//!    a cell return to ratios in inverse proportion to their `g_hat` (three to one in the
+//!    cell on a `g = 0` wall at 2 x 2 points per cell), a pattern of stress the grid's forces
+//!    cannot see either: measured, a layer at rest kept ratios from `mu_s` to `mu_2` in
+//!    alternate rows, and a layer at 1.1 `H_stop` flowed at half the speed it had at 1 x 1
+//!    (docs/VALIDATION.md). A point whose trial shear is well above its cell's could still
+//!    return above `mu_2`, which no fluidity reaches (its rate of growth diverges there): it
+//!    takes at least the fluidity that returns it onto `mu_2`. That bound never feeds the
+//!    points' `g`, so it cannot grow what the grid cannot see.
+//!
+//! Why on the nodes: with more points than nodes, part of the points' fluidity (a pattern
+//! alternating from point to point inside the cells) scatters to nothing. Advanced on the
+//! points, that part has no Laplacian and grew at the local rate whatever the layer's
+//! thickness: a layer below `H_stop` flowed at 2 x 2 points per cell (docs/VALIDATION.md).
+//! On the nodes, what the grid cannot see neither grows nor smooths, and the stress never
+//! sees it (`g_hat` comes from the nodes). The diffusion number
+//! `A^2 d^2 dt/(t0 h^2)` must stay below 1/4 for the explicit Laplacian; the scene check
+//! refuses a scene whose largest step would break it.
 //!
 //! `g = 0` solves the equation, so a body at rest stays at rest unless something starts it: a
-//! point whose trial stress ratio rises above `mu_s` with zero fluidity is seeded with
-//! `fluidity_seed sqrt(p/rho_s)/d`, once until it falls back below `mu_s` or disconnects. A
-//! reconnecting point starts from zero fluidity and is seeded the same way. Where the stress
-//! exceeds `mu_2` no seed is needed: no `g` short of the one bringing `mu` below `mu_2` solves
-//! the equation. A fluidity too small to change the stress in floating point
-//! (`G dt g < eps p`) is set to zero, so a layer below `H_stop` comes exactly to rest.
+//! point whose trial stress ratio rises above `mu_s` has its `g` raised to at least the seed
+//! `fluidity_seed sqrt(p/rho_s)/d`, once until it falls back below `mu_s` or disconnects;
+//! the seeds reach the nodes through the scatter. (At least, not only from zero: a point at
+//! rest may still carry a small part the grid cannot see, of either sign.) Disconnected
+//! points carry no fluidity and are left out of the scatter; a point that reconnects takes
+//! the nodes' new fluidity interpolated to it, or the seed (if its ratio is above `mu_s`)
+//! where no node of its footprint is active. Where the
+//! stress exceeds `mu_2` no seed is needed: no `g` short of the one bringing `mu` below
+//! `mu_2` solves the equation. A nodal fluidity below `REST` (`1e-12`) times the rate scale
+//! `sqrt(p/rho_s)/d`, or too small to change the stress in floating point, is set to zero, so
+//! a layer below `H_stop` comes exactly to rest.
 
 use serde::{Deserialize, Serialize};
 
 use bevy_ecs::prelude::*;
+use rayon::prelude::*;
 
 use super::granular::{TransPhase, check_positive, trans_phase_params};
 use super::{Material, MaterialState, PointOutcome, PointStep};
 use crate::body::{Phase, PointStates, Points};
 use crate::grid::GridGeometry;
-use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields};
+use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields, StartBands};
 use crate::registry::Item;
-use crate::resources::{Boundaries, Wall, Walls};
-use crate::step::{Bands, Core, Location, StepSet};
+use crate::resources::{Boundaries, Clock, Wall, Walls};
+use crate::step::{Core, Location, StepSet};
 use crate::stress::Stress;
 
 /// The nonlocal amplitude `A` unless the scene gives one: Henann & Kamrin's (2013) calibration
@@ -53,13 +83,21 @@ pub const DEFAULT_TIME_SCALE: f64 = 1e-3;
 /// The seed, in units of `sqrt(p/rho_s)/d`, unless the scene gives one.
 pub const DEFAULT_SEED: f64 = 1e-2;
 
+/// A nodal fluidity below this many times the rate scale `sqrt(p/rho_s)/d` is rest (zero):
+/// a creep ten orders of magnitude below the default seed. The nodes' values are means of
+/// the points', which carry what the grid cannot see (of either sign, as large as the seed);
+/// the round-off of those means keeps a layer below `H_stop` at about `1e-15` /s where exact
+/// arithmetic would decay it for ever, so "too small to change the stress" alone never came.
+pub const REST: f64 = 1e-12;
+
 /// The fluidity solve stops when a step changes `g` by less than this, relatively.
 const TOLERANCE: f64 = 1e-13;
 /// And gives up after this many steps (bisection alone would halve the bracket this often).
 const MAX_ITERATIONS: usize = 200;
 
-/// The grid field's column: the Laplacian of the fluidity at each point.
-const LAPLACIAN: &[&str] = &["fluidity_laplacian"];
+/// The grid field's column: the fluidity interpolated from the nodes at each point, which the
+/// return uses.
+const INTERPOLATED: &[&str] = &["fluidity_interpolated"];
 
 /// What a wall imposes on the fluidity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -144,6 +182,14 @@ impl TryFrom<NonlocalParams> for Nonlocal {
         check_positive("fluidity_time_scale", time_scale, "s")?;
         let seed = p.fluidity_seed.unwrap_or(DEFAULT_SEED);
         check_positive("fluidity_seed", seed, "dimensionless")?;
+        if seed < 1e3 * REST {
+            return Err(format!(
+                "fluidity_seed = {seed:e} is within three orders of magnitude of the fluidity \
+                 taken as rest ({REST:e} sqrt(p/rho_s)/d), so a seeded point would be at rest \
+                 in a few steps: give at least {:e}",
+                1e3 * REST
+            ));
+        }
         Ok(Nonlocal {
             base,
             amplitude,
@@ -282,7 +328,35 @@ impl Nonlocal {
         g
     }
 
-    /// One point's update: the elastic trial, the fluidity, the return.
+    /// The seeding rule on a point's `g` at trial pressure `p` and ratio `mu_trial`
+    /// (module docs).
+    fn seed(&self, history: &mut FluidityHistory, p: f64, mu_trial: f64) {
+        if mu_trial <= self.base.mu_s {
+            history.seeded = false;
+        } else if !history.seeded {
+            history.fluidity = history.fluidity.max(self.seed * self.rate_scale(p));
+            history.seeded = true;
+        }
+    }
+
+    /// The fluidity a node takes after a step `dt` from `g_n`, given its Laplacian
+    /// `laplacian` (explicit) and the scattered trial shear `tau_tr` and pressure `p > 0`:
+    /// [`Nonlocal::advance`] with the return's ratio, set to zero at rest (below [`REST`]
+    /// times the rate scale, or too small to change the stress in floating point).
+    pub fn advance_node(&self, g_n: f64, laplacian: f64, tau_tr: f64, p: f64, dt: f64) -> f64 {
+        let ad = self.amplitude * self.base.grain_diameter;
+        let gdt = self.base.shear * dt;
+        let g = self.advance(g_n, ad * ad * laplacian, tau_tr, p, gdt, dt);
+        if g < REST * self.rate_scale(p) || gdt * g < f64::EPSILON * p {
+            0.0
+        } else {
+            g
+        }
+    }
+
+    /// One point's update: the elastic trial and the return with the fluidity interpolated
+    /// from the nodes, `step.fields[0]` (`g_hat`; module docs). A disconnected point's
+    /// fluidity is cleared.
     pub fn update_point(
         &self,
         stress: &mut Stress,
@@ -290,7 +364,6 @@ impl Nonlocal {
         step: &PointStep,
     ) -> PointOutcome {
         let m = &self.base;
-        let (shear, dt) = (m.shear, step.dt);
         let trial = match m.dense_trial(stress, step) {
             Ok(trial) => trial,
             Err(disconnected) => {
@@ -300,25 +373,13 @@ impl Nonlocal {
         };
         let p = trial.pressure();
         let tau_trial = trial.equivalent_shear();
-        let mu_trial = tau_trial / p;
-        let mut g_n = history.fluidity;
-        if mu_trial <= m.mu_s {
-            history.seeded = false;
-        } else if !history.seeded {
-            if g_n == 0.0 {
-                g_n = self.seed * self.rate_scale(p);
-            }
-            history.seeded = true;
-        }
-        let laplacian = step.fields.first().copied().unwrap_or(0.0);
-        let ad = self.amplitude * m.grain_diameter;
-        let gdt = shear * dt;
-        let mut g = self.advance(g_n, ad * ad * laplacian, tau_trial, p, gdt, dt);
+        let gdt = m.shear * step.dt;
+        // The nodes solve for `mu < mu_2`; a point whose trial shear is above its nodes'
+        // mean could still return above `mu_2`, where the fluidity would grow without bound,
+        // so it takes at least the fluidity that brings it onto `mu_2`.
+        let g_hat = step.fields.first().copied().unwrap_or(0.0);
+        let g = g_hat.max((tau_trial / m.mu_2 - p) / gdt);
         if gdt * g < f64::EPSILON * p {
-            g = 0.0;
-        }
-        history.fluidity = g;
-        if g == 0.0 {
             *stress = trial;
             return PointOutcome {
                 plastic_strain_rate: 0.0,
@@ -328,7 +389,7 @@ impl Nonlocal {
         let scale = p / (p + gdt * g);
         *stress = trial.deviator().scaled(scale) + Stress::isotropic(p);
         PointOutcome {
-            plastic_strain_rate: g * mu_trial * scale,
+            plastic_strain_rate: g * tau_trial / p * scale,
             phase: Phase::Flowing,
         }
     }
@@ -372,30 +433,18 @@ impl Material for Nonlocal {
             self.time_scale
         ))
     }
-    /// With more than one point per cell the grid cannot see part of the points' fluidity,
-    /// and that part grows at the local rate whatever the layer's thickness (measured:
-    /// docs/VALIDATION.md, "Nonlocal granular fluidity").
-    fn warning(&self, points_per_cell: usize) -> Option<String> {
-        (points_per_cell > 1).then(|| {
-            format!(
-                "Nonlocal with {points_per_cell} x {points_per_cell} points per cell: the \
-                 fluidity's sub-cell modes are invisible to the grid's Laplacian and grow \
-                 unchecked, so thin layers flow below H_stop (at 25 degrees a layer of 0.8 H_stop \
-                 flows at 1.9 mm/s with 2 x 2 points, creeps at 2e-5 m/s with 1 x 1; \
-                 docs/VALIDATION.md); the material is not yet validated \
-                 in MPM (issue 36)"
-            )
-        })
-    }
     fn point_fields() -> &'static [&'static str] {
-        LAPLACIAN
+        INTERPOLATED
     }
     fn add_field_systems(schedule: &mut Schedule) {
-        schedule.add_systems(
-            fluidity_field
+        schedule.add_systems((
+            grid_field::keep_start_bands::<Nonlocal>
                 .in_set(StepSet::ParticleToGrid)
                 .after(Core(StepSet::ParticleToGrid)),
-        );
+            advance_fluidity
+                .in_set(StepSet::GridToParticle)
+                .after(Core(StepSet::GridToParticle)),
+        ));
     }
     fn update(
         &self,
@@ -409,33 +458,164 @@ impl Material for Nonlocal {
 
 /// What the fluidity's grid field reads and writes of a body.
 type FluidityBody<'a> = (
-    &'a MaterialState<Nonlocal>,
+    &'a mut MaterialState<Nonlocal>,
     &'a Points,
     &'a PointStates,
     &'a Location,
-    &'a Bands,
+    &'a StartBands,
     &'a mut GridFields,
     &'a mut PointFields,
 );
 
-/// The fluidity's grid field of every body of this material: its Laplacian at each point
-/// (module docs, step 1).
-pub fn fluidity_field(
+/// What the fluidity's step knows of a point after its elastic trial.
+#[derive(Clone, Copy, Debug, Default)]
+enum Trial {
+    /// Disconnected (or retired): no fluidity.
+    #[default]
+    Out,
+    /// Dense, and dense at the start of the step: scattered to the nodes.
+    Dense { p: f64, tau: f64 },
+    /// Dense again after a disconnected step: takes the nodes' fluidity (module docs).
+    Reconnecting { p: f64, tau: f64 },
+}
+
+/// Scratch reused from step to step.
+#[derive(Default)]
+pub struct FluidityScratch {
+    trials: Vec<Trial>,
+    /// Per point: the interpolated new fluidity, the interpolated increment, and whether
+    /// any node of the footprint is active.
+    interpolated: Vec<(f64, f64, bool)>,
+    next: Vec<f64>,
+    increment: Vec<f64>,
+}
+
+/// The fluidity's step on the nodes for every body of this material (module docs, step 1).
+pub fn advance_fluidity(
     grid: Res<GridGeometry>,
     boundaries: Res<Boundaries>,
+    clock: Res<Clock>,
     mut bodies: Query<FluidityBody>,
+    mut scratch: Local<FluidityScratch>,
 ) {
-    for (state, points, states, location, bands, mut nodal, mut at_points) in &mut bodies {
-        let walls = state.params.walls.resolve(&boundaries.0);
-        let history = &state.history;
-        let mut laplacian = std::mem::take(&mut nodal.field_mut(LAPLACIAN[0]).value);
-        let fluidity = nodal.field_mut("fluidity");
-        grid_field::scatter(&grid, location, bands, fluidity, |p| {
-            let dense = states.phase[p] != Phase::Disconnected && points.mass[p] > 0.0;
-            dense.then(|| (points.volume[p], history[p].fluidity))
+    let dt = clock.dt;
+    let scratch = &mut *scratch;
+    for (mut state, points, states, location, bands, mut nodal, mut at_points) in &mut bodies {
+        let state = &mut *state;
+        let (params, history) = (&state.params, &mut state.history);
+        let walls = params.walls.resolve(&boundaries.0);
+        // The elastic trial of every point, and the seeding rule on the dense ones.
+        scratch.trials.clear();
+        scratch
+            .trials
+            .par_extend(history.par_iter_mut().enumerate().map(|(k, history)| {
+                if points.mass[k] == 0.0 {
+                    return Trial::Out;
+                }
+                let step = PointStep {
+                    velocity_gradient: points.velocity_gradient[k],
+                    dt,
+                    density: points.density[k],
+                    fields: &[],
+                };
+                let mut stress = points.stress[k];
+                let Ok(trial) = params.base.dense_trial(&mut stress, &step) else {
+                    *history = FluidityHistory::default();
+                    return Trial::Out;
+                };
+                let (p, tau) = (trial.pressure(), trial.equivalent_shear());
+                if states.phase[k] == Phase::Disconnected {
+                    return Trial::Reconnecting { p, tau };
+                }
+                params.seed(history, p, tau / p);
+                Trial::Dense { p, tau }
+            }));
+        let trials = &scratch.trials;
+        let dense = |k: usize| match trials[k] {
+            Trial::Dense { p, tau } => Some((points.volume[k], p, tau)),
+            _ => None,
+        };
+        let history_now = &*history;
+        let mut fluidity = std::mem::take(nodal.field_mut("fluidity"));
+        let mut pressure = std::mem::take(nodal.field_mut("trial_pressure"));
+        let mut shear = std::mem::take(nodal.field_mut("trial_shear"));
+        let mut laplacian = std::mem::take(&mut nodal.field_mut("fluidity_laplacian").value);
+        let bands = &bands.0;
+        grid_field::scatter(&grid, location, bands, &mut fluidity, |k| {
+            dense(k).map(|(v, _, _)| (v, history_now[k].fluidity))
         });
-        grid_field::laplacian(&grid, fluidity, &walls, &mut laplacian);
-        at_points.fill(0, |k| grid_field::gather(location, &laplacian, k));
-        nodal.field_mut(LAPLACIAN[0]).value = laplacian;
+        grid_field::scatter(&grid, location, bands, &mut pressure, |k| {
+            dense(k).map(|(v, p, _)| (v, p))
+        });
+        grid_field::scatter(&grid, location, bands, &mut shear, |k| {
+            dense(k).map(|(v, _, tau)| (v, tau))
+        });
+        let fixed = grid_field::laplacian(&grid, &mut fluidity, &walls, &mut laplacian);
+        // The nodal update: free active nodes solve the equation, fixed ones keep the wall's
+        // value (set on `fluidity` by the Laplacian), inactive ones stay at zero.
+        scratch.next.clear();
+        scratch
+            .next
+            .par_extend((0..grid.node_count()).into_par_iter().map(|n| {
+                if !fluidity.active(n) || fixed[n] {
+                    return fluidity.value[n];
+                }
+                params.advance_node(
+                    fluidity.value[n],
+                    laplacian[n],
+                    shear.value[n],
+                    pressure.value[n],
+                    dt,
+                )
+            }));
+        scratch.increment.clear();
+        scratch.increment.par_extend(
+            scratch
+                .next
+                .par_iter()
+                .zip(fluidity.value.par_iter())
+                .map(|(new, old)| new - old),
+        );
+        let (next, increment) = (&scratch.next, &scratch.increment);
+        scratch.interpolated.clear();
+        scratch
+            .interpolated
+            .par_extend((0..trials.len()).into_par_iter().map(
+                |k| match grid_field::gather_active(location, &fluidity, [next, increment], k) {
+                    Some([g, dg]) => (g, dg, true),
+                    None => (0.0, 0.0, false),
+                },
+            ));
+        // The points: the increment on dense ones, the nodes' fluidity on reconnecting ones.
+        let interpolated = &scratch.interpolated;
+        history
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, history)| match trials[k] {
+                Trial::Out => {}
+                // Not clipped at zero: the point's `g` is the nodes' plus what the grid
+                // cannot see, which may be of either sign; only nodal values (and so
+                // `g_hat`) are kept non-negative, by the nodal solve.
+                Trial::Dense { .. } => history.fluidity += interpolated[k].1,
+                Trial::Reconnecting { p, tau } => {
+                    let (g_hat, _, reached) = interpolated[k];
+                    if reached {
+                        history.fluidity = g_hat;
+                        history.seeded = tau > params.base.mu_s * p;
+                    } else {
+                        params.seed(history, p, tau / p);
+                    }
+                }
+            });
+        let history = &*history;
+        // The return's fluidity: the nodes' at the centre of the point's cell (module docs).
+        at_points.fill(0, |k| {
+            grid_field::at_cell_centre(&grid, &fluidity, next, points.position[k])
+                .unwrap_or(history[k].fluidity)
+        });
+        *nodal.field_mut("fluidity") = fluidity;
+        *nodal.field_mut("trial_pressure") = pressure;
+        *nodal.field_mut("trial_shear") = shear;
+        nodal.field_mut("fluidity_laplacian").value = laplacian;
     }
 }

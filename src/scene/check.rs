@@ -81,11 +81,6 @@ impl Scene {
             );
         }
         w.extend(self.resolution_warnings());
-        w.extend(self.bodies.iter().filter_map(|b| {
-            b.material
-                .warning(b.points_per_cell)
-                .map(|m| format!("body \"{}\": {m}", b.name))
-        }));
         w
     }
 
