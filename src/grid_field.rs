@@ -436,6 +436,36 @@ mod tests {
         top: NodeCondition::ZeroFlux,
     };
 
+    /// The centre of a cell reads the mean of its active corners, wrapping on a periodic
+    /// axis: for a linear field, its value at the centre.
+    #[test]
+    fn a_cell_centre_reads_the_mean_of_its_active_corners() {
+        let grid = GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [4, 3],
+            periodic: [true, false],
+        };
+        let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
+        let values: Vec<f64> = (0..nx * ny)
+            .map(|n| (n % nx) as f64 + 2.0 * (n / nx) as f64)
+            .collect();
+        let mut field = field_of(values.clone());
+        let at = |field: &NodalScalar, x: f64, y: f64| {
+            at_cell_centre(&grid, field, &values, DVec2::new(x, y))
+        };
+        assert_eq!(at(&field, 1.2, 2.9), Some(1.5 + 2.0 * 2.5));
+        // The last column's cell closes on the first column's nodes: (3 + 0) / 2 along x.
+        assert_eq!(at(&field, 3.7, 0.1), Some(1.5 + 2.0 * 0.5));
+        // An inactive corner is left out.
+        field.weight[grid.index(2, 3)] = 0.0;
+        assert_eq!(at(&field, 1.2, 2.9), Some((5.0 + 6.0 + 7.0) / 3.0));
+        for n in [grid.index(1, 2), grid.index(2, 2), grid.index(1, 3)] {
+            field.weight[n] = 0.0;
+        }
+        assert_eq!(at(&field, 1.2, 2.9), None);
+    }
+
     #[test]
     fn the_laplacian_of_a_quadratic_is_exact_inside_and_reflects_at_the_edges() {
         let grid = line(10, 0.5, false);

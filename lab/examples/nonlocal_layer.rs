@@ -5,7 +5,7 @@
 //!
 //! `cargo run --release -p regolith-lab --example nonlocal_layer -- ANGLE H/H_STOP CELLS END [SET...]`
 //! runs a layer `H/H_STOP` times the analytic stopping height at `ANGLE` degrees, `CELLS` cells
-//! deep (4 long), to `END` seconds, with scene overrides `SET` (`key=value`, as `--set`), and
+//! deep (4 long; `CELLS` may be fractional, `5.5` puts the top half way up a cell), to `END` seconds, with scene overrides `SET` (`key=value`, as `--set`), and
 //! prints the layer's mean and largest speed and its flowing fraction ten times.
 
 use regolith_lab::verify::chute::Steady;
@@ -24,7 +24,7 @@ fn main() {
     let (angle, fraction, cells, end) = (
         number(0, "ANGLE"),
         number(1, "H/H_STOP"),
-        number(2, "CELLS") as usize,
+        number(2, "CELLS"),
         number(3, "END"),
     );
     let sets = args.get(4..).unwrap_or_default().to_vec();
@@ -37,8 +37,8 @@ fn main() {
          (A d / h = {:.2}); 1D steady mean speed {}, surface speed {}",
         1e3 * stop,
         1e3 * depth,
-        1e3 * depth / cells as f64,
-        material.amplitude * material.base.grain_diameter * cells as f64 / depth,
+        1e3 * depth / cells,
+        material.amplitude * material.base.grain_diameter * cells / depth,
         steady.as_ref().map_or("- (at rest)".into(), |l| format!(
             "{:.3e} m/s",
             l.mean_speed()

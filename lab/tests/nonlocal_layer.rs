@@ -14,7 +14,7 @@ use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
 use regolith_lab::verify::nonlocal::{LayerState, ps1_nonlocal, ps1_nonlocal_ron, run_layer};
 
 const ANGLE: f64 = 25.0;
-const CELLS: usize = 6;
+const CELLS: f64 = 6.0;
 
 /// The layer of `fraction` times the stopping height at 25 degrees at `points` x `points`
 /// points per cell, started at rest in its lithostatic state: its state every 0.01 s to `end`.

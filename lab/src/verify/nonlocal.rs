@@ -64,42 +64,20 @@ impl NonlocalLayer {
         // Start from the local fluidity, alpha/(beta mu).
         let mut g: Vec<f64> = quad.iter().map(|q| alpha / q).collect();
         let scale = g.iter().cloned().fold(0.0, f64::max);
-        let mut converged = false;
-        for _ in 0..200 {
-            // Residual and tridiagonal Jacobian; ghosts g_{-1} = -g_0, g_n = g_{n-1}.
-            let mut r = vec![0.0; cells];
-            let mut diag = vec![0.0; cells];
-            for k in 0..cells {
-                let below = if k == 0 { -g[0] } else { g[k - 1] };
-                let above = if k + 1 == cells { g[k] } else { g[k + 1] };
-                r[k] = c * (below - 2.0 * g[k] + above) + alpha * g[k] - quad[k] * g[k] * g[k];
-                let ghost = if k == 0 {
-                    -c
-                } else if k + 1 == cells {
-                    c
-                } else {
-                    0.0
-                };
-                diag[k] = -2.0 * c + ghost + alpha - 2.0 * quad[k] * g[k];
-            }
-            let step = solve_tridiagonal(c, &diag, &r);
-            let mut largest: f64 = 0.0;
-            // Damped so that no fluidity goes negative.
-            let mut damping: f64 = 1.0;
-            for k in 0..cells {
-                if g[k] - step[k] < 0.0 {
-                    damping = damping.min(0.5 * g[k] / step[k]);
-                }
-            }
-            for k in 0..cells {
-                g[k] -= damping * step[k];
-                largest = largest.max(step[k].abs());
-            }
-            if largest < 1e-12 * scale && damping == 1.0 {
-                converged = true;
-                break;
-            }
-        }
+        // Ghosts g_{-1} = -g_0 (g = 0 on the base face), g_n = g_{n-1} (zero flux on top).
+        let converged = newton_tridiagonal(c, &mut g, |g, k| {
+            let below = if k == 0 { -g[0] } else { g[k - 1] };
+            let above = if k + 1 == cells { g[k] } else { g[k + 1] };
+            let residual = c * (below - 2.0 * g[k] + above) + alpha * g[k] - quad[k] * g[k] * g[k];
+            let ghost = if k == 0 {
+                -c
+            } else if k + 1 == cells {
+                c
+            } else {
+                0.0
+            };
+            (residual, -2.0 * c + ghost + alpha - 2.0 * quad[k] * g[k])
+        });
         let flowing = g.iter().cloned().fold(0.0, f64::max) > 1e-6 * scale;
         if !converged || !flowing {
             return None;
@@ -125,6 +103,121 @@ impl NonlocalLayer {
             .sum::<f64>()
             / n as f64
     }
+}
+
+/// The steady layer as the MPM scheme discretises it (`material::nonlocal`), solved in 1D on
+/// the same nodes: `cells` cells across `depth`, the fluidity's unknowns on the nodes, `g = 0`
+/// on the base node and zero flux through the top one (the 5-point Laplacian's reflection),
+/// each node's `g^2` coefficient formed from the volume-weighted mean of the pressures of the
+/// `points_per_cell` points per cell along the height (linear weights, as fixed-extent CPDI
+/// gives at the points' lattice sites), and the speed integrated from the base node with the
+/// shear rate `mu g_hat` of each cell, `g_hat` the mean of its two nodes. Returns the mean of
+/// the points' speeds, or `None` if the layer has no flowing solution on these nodes. The
+/// MPM layer of the same cells is measured against this (discretisation shared), and this
+/// against [`NonlocalLayer::solve`] converged (the discretisation's own error).
+pub fn nodal_mean_speed(
+    material: &Nonlocal,
+    angle: f64,
+    depth: f64,
+    gravity: f64,
+    cells: usize,
+    points_per_cell: usize,
+) -> Option<f64> {
+    let m = &material.base;
+    let mu = angle.tan();
+    if !(mu > m.mu_s && mu < m.mu_2) {
+        return None;
+    }
+    let h = depth / cells as f64;
+    let ad = material.amplitude * m.grain_diameter;
+    let c = ad * ad / (h * h);
+    let alpha = material.growth(mu);
+    let b = (m.mu_2 - m.mu_s) / m.i_0;
+    let points: Vec<f64> = (0..cells * points_per_cell)
+        .map(|k| (k as f64 + 0.5) * h / points_per_cell as f64)
+        .collect();
+    let pressure = |y: f64| m.critical_density * gravity * angle.cos() * (depth - y);
+    // Unknowns on nodes 1..=cells (node 0 is the base, g = 0).
+    let quad: Vec<f64> = (1..=cells)
+        .map(|j| {
+            let yj = j as f64 * h;
+            let (mut sum, mut weight) = (0.0, 0.0);
+            for &y in &points {
+                let w = (1.0 - (y - yj).abs() / h).max(0.0);
+                sum += w * pressure(y);
+                weight += w;
+            }
+            b * m.grain_diameter * (m.grain_density / (sum / weight)).sqrt() * mu
+        })
+        .collect();
+    let top = cells - 1;
+    // Start from the local fluidity shaped like the slowest mode.
+    let mut g: Vec<f64> = (0..cells)
+        .map(|k| {
+            alpha / quad[k] * (std::f64::consts::FRAC_PI_2 * (k + 1) as f64 / cells as f64).sin()
+        })
+        .collect();
+    let scale = g.iter().cloned().fold(0.0, f64::max);
+    // The top node's row is halved so the Jacobian stays symmetric (its reflection gives it
+    // twice the coupling to the node below).
+    let converged = newton_tridiagonal(c, &mut g, |g, k| {
+        let below = if k == 0 { 0.0 } else { g[k - 1] };
+        let source = alpha * g[k] - quad[k] * g[k] * g[k];
+        let slope = alpha - 2.0 * quad[k] * g[k];
+        if k == top {
+            (c * (below - g[k]) + 0.5 * source, -c + 0.5 * slope)
+        } else {
+            (
+                c * (below - 2.0 * g[k] + g[k + 1]) + source,
+                -2.0 * c + slope,
+            )
+        }
+    });
+    if !converged || g.iter().cloned().fold(0.0, f64::max) < 1e-6 * scale {
+        return None;
+    }
+    let nodal = |j: usize| if j == 0 { 0.0 } else { g[j - 1] };
+    let mut speed = vec![0.0; cells + 1];
+    for j in 0..cells {
+        speed[j + 1] = speed[j] + h * mu * 0.5 * (nodal(j) + nodal(j + 1));
+    }
+    let mean = points
+        .iter()
+        .map(|&y| {
+            let j = ((y / h) as usize).min(cells - 1);
+            let f = y / h - j as f64;
+            speed[j] * (1.0 - f) + speed[j + 1] * f
+        })
+        .sum::<f64>()
+        / points.len() as f64;
+    Some(mean)
+}
+
+/// Newton's method for `F(g) = 0` whose Jacobian is symmetric tridiagonal with `c` off the
+/// diagonal: `row(g, k)` is row `k`'s residual and diagonal entry. Each step is damped so that
+/// no unknown goes negative; converged when a whole step is below 1e-12 of the largest
+/// starting value (at most 200 steps).
+fn newton_tridiagonal(c: f64, g: &mut [f64], row: impl Fn(&[f64], usize) -> (f64, f64)) -> bool {
+    let scale = g.iter().cloned().fold(0.0, f64::max);
+    for _ in 0..200 {
+        let (r, diag): (Vec<f64>, Vec<f64>) = (0..g.len()).map(|k| row(g, k)).unzip();
+        let step = solve_tridiagonal(c, &diag, &r);
+        let mut damping: f64 = 1.0;
+        for (x, dx) in g.iter().zip(&step) {
+            if x - dx < 0.0 {
+                damping = damping.min(0.5 * x / dx);
+            }
+        }
+        let mut largest: f64 = 0.0;
+        for (x, dx) in g.iter_mut().zip(&step) {
+            *x -= damping * dx;
+            largest = largest.max(dx.abs());
+        }
+        if largest < 1e-12 * scale && damping == 1.0 {
+            return true;
+        }
+    }
+    false
 }
 
 /// Solves `J x = r` for the tridiagonal `J` with `off` on both off-diagonals (Thomas).
@@ -202,7 +295,8 @@ pub struct LayerState {
 
 /// A layer of the material `material` (a scene item, e.g. [`ps1_nonlocal_ron`]) and depth
 /// `depth` on a rough (no-slip) incline at `angle_deg` degrees, periodic along the slope,
-/// `cells` cells deep (its top on a cell boundary) and 4 cells long, 2 x 2 points per cell,
+/// `cells` cells deep (a whole number puts its top on a cell boundary, `n + 0.5` half way up
+/// a cell) and 4 cells long, 2 x 2 points per cell,
 /// started from its lithostatic state at rest under the tilted gravity and run to `end` s;
 /// `each` sees the state every `every` s. `sets` are further scene overrides.
 #[allow(clippy::too_many_arguments)]
@@ -210,13 +304,14 @@ pub fn run_layer(
     material: &str,
     angle_deg: f64,
     depth: f64,
-    cells: usize,
+    cells: f64,
     end: f64,
     every: f64,
     sets: &[String],
     mut each: impl FnMut(&LayerState) + Send,
 ) -> Result<(), String> {
-    let h = depth / cells as f64;
+    let h = depth / cells;
+    let rows = 2 * cells.ceil() as usize;
     let th = angle_deg.to_radians();
     let gravity = DVec2::new(9.81 * th.sin(), -9.81 * th.cos());
     let text = format!(
@@ -226,8 +321,7 @@ pub fn run_layer(
          bodies: [(name: \"layer\", shape: Rectangle(min: (0.0, 0.0), max: ({w}, {depth})), \
          material: {material}, points_per_cell: 2)])",
         w = 4.0 * h,
-        hgt = (2 * cells) as f64 * h,
-        rows = 2 * cells,
+        hgt = rows as f64 * h,
         gx = gravity.x,
         gy = gravity.y,
     );
@@ -297,6 +391,34 @@ fn layer_steps(
 mod tests {
     use super::*;
     use crate::verify::chute::Bagnold;
+
+    /// The MPM scheme's discretisation in 1D converges to the finite-volume solution as the
+    /// nodes are refined, and has no flowing solution just below `H_stop` (its discrete
+    /// stopping height is the continuum's to `sin(pi/4N)/(pi/4N)`, 0.3% on 6 cells).
+    #[test]
+    fn the_nodal_layer_converges_and_stops_where_the_model_does() {
+        let m = ps1_nonlocal(0.48);
+        let th = 25f64.to_radians();
+        let stop = m.stopping_height(th);
+        let converged = NonlocalLayer::solve(&m, th, 2.0 * stop, 9.81, 1600)
+            .unwrap()
+            .mean_speed();
+        let gaps: Vec<f64> = [12, 48, 192, 768]
+            .iter()
+            .map(|&n| {
+                let u = nodal_mean_speed(&m, th, 2.0 * stop, 9.81, n, 2).unwrap();
+                (u / converged - 1.0).abs()
+            })
+            .collect();
+        assert!(
+            gaps.windows(2).all(|w| w[1] < w[0]) && gaps[3] < 0.01,
+            "gaps to the converged mean speed on 12, 48, 192, 768 cells: {gaps:?}"
+        );
+        for points in [1, 2] {
+            assert!(nodal_mean_speed(&m, th, 0.99 * stop, 9.81, 6, points).is_none());
+            assert!(nodal_mean_speed(&m, th, 1.01 * stop, 9.81, 6, points).is_some());
+        }
+    }
 
     /// Thick layers recover the local (Bagnold) profile, thin ones are slower, and the ratio
     /// of surface speeds matches the design brief's independent 1D solve (NONLOCAL.md §5b:
