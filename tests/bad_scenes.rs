@@ -133,6 +133,14 @@ fn bad_scenes_give_their_messages() {
             Some(11),
         ),
         (
+            11,
+            "            material: Nonlocal(youngs_modulus: 2.0e7, poisson_ratio: 0.45, \
+             grain_density: 1280.0, packing_fraction: 0.79, grain_diameter: 5.0e-3, \
+             mu_s: 0.320, mu_2: 0.598, i_0: 0.278, fluidity_seed: 1e-12),",
+            "fluidity_seed = 1e-12 is within three orders of magnitude of the fluidity taken as rest",
+            Some(11),
+        ),
+        (
             10,
             "            shape: Rectangle(min: (0.2, 0.0), max: (0.1, 0.4)),",
             "width (max.x - min.x) must be a positive",

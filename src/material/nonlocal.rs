@@ -14,13 +14,20 @@
 //! usual treatment of a diffused field in MPM (as thermal and damage fields are):
 //! 1. `advance_fluidity` (a grid field, `crate::grid_field`, in `GridToParticle` after the
 //!    velocity gradient and the density are known): each point's elastic trial stress; the
-//!    seeding rule (below) on its `g`; the dense points' `g`, trial pressure `p` and trial
-//!    equivalent shear `tau_tr` scattered to the nodes with their volumes as weights; the
-//!    nodal Laplacian of `g` with the walls' conditions (`g = 0` on no-slip walls, zero flux
-//!    elsewhere, settable per wall); and at each free node the equation above with the
-//!    Laplacian explicit and everything else implicit, `mu` being the ratio the return will
-//!    give, `tau_tr/(p + G dt g)` of the unknown `g`: one scalar root, found by a safeguarded
-//!    Newton iteration in a bracket (`Nonlocal::advance`), so `mu` stays below `mu_2`.
+//!    seeding rule (below) on its `g`; the dense points' `g` and trial pressure `p` scattered
+//!    to the nodes with their volumes as weights; the nodal Laplacian of `g` with the walls'
+//!    conditions (`g = 0` on no-slip walls, zero flux elsewhere, settable per wall); each
+//!    point's ratio were it returned with its cell's present fluidity,
+//!    `q = tau_tr/(p + G dt g_cell)`, scattered the same way; and at each free node the
+//!    equation above with the Laplacian explicit and everything else implicit, `mu` being
+//!    `q_i (p_i + G dt g_i)/(p_i + G dt g)` of the unknown `g`: one scalar root, found by a
+//!    safeguarded Newton iteration in a bracket (`Nonlocal::advance`), so `mu` stays below
+//!    `mu_2`. The node's ratio at its present fluidity is so the mean of the ratios its
+//!    points will return to. (Scattering `tau_tr` itself and taking `tau_tr/(p + G dt g)`
+//!    makes it the ratio of means, which is not the mean of the points' ratios where the
+//!    fluidity varies across a node's support: in a steady 2 `H_stop` layer on 6 cells the
+//!    nodal ratios sat 2% below `tan theta`, and the layer ran 17% slower than the 1D model
+//!    on its own nodes, 1% faster when the step was halved; docs/VALIDATION.md.)
 //!    Each point then adds the interpolated increment `sum N (g_new - g_old)` to its `g`
 //!    (over the active nodes, renormalised: `grid_field::gather_active`).
 //! 2. The update (per point): the elastic trial again, and the return with `g_hat`, the new
@@ -538,7 +545,7 @@ pub fn advance_fluidity(
         let history_now = &*history;
         let mut fluidity = std::mem::take(nodal.field_mut("fluidity"));
         let mut pressure = std::mem::take(nodal.field_mut("trial_pressure"));
-        let mut shear = std::mem::take(nodal.field_mut("trial_shear"));
+        let mut ratio = std::mem::take(nodal.field_mut("trial_ratio"));
         let mut laplacian = std::mem::take(&mut nodal.field_mut("fluidity_laplacian").value);
         let bands = &bands.0;
         grid_field::scatter(&grid, location, bands, &mut fluidity, |k| {
@@ -547,10 +554,21 @@ pub fn advance_fluidity(
         grid_field::scatter(&grid, location, bands, &mut pressure, |k| {
             dense(k).map(|(v, p, _)| (v, p))
         });
-        grid_field::scatter(&grid, location, bands, &mut shear, |k| {
-            dense(k).map(|(v, _, tau)| (v, tau))
-        });
         let fixed = grid_field::laplacian(&grid, &mut fluidity, &walls, &mut laplacian);
+        // Each point's ratio if it returned with the fluidity its cell has now: the node's
+        // ratio at its own fluidity is their mean (module docs, "The node's ratio").
+        let gdt = params.base.shear * dt;
+        grid_field::scatter(&grid, location, bands, &mut ratio, |k| {
+            dense(k).map(|(v, p, tau)| {
+                let g = grid_field::at_cell_centre(
+                    &grid,
+                    &fluidity,
+                    &fluidity.value,
+                    points.position[k],
+                );
+                (v, tau / (p + gdt * g.unwrap_or(0.0)))
+            })
+        });
         // The nodal update: free active nodes solve the equation, fixed ones keep the wall's
         // value (set on `fluidity` by the Laplacian), inactive ones stay at zero.
         scratch.next.clear();
@@ -560,13 +578,8 @@ pub fn advance_fluidity(
                 if !fluidity.active(n) || fixed[n] {
                     return fluidity.value[n];
                 }
-                params.advance_node(
-                    fluidity.value[n],
-                    laplacian[n],
-                    shear.value[n],
-                    pressure.value[n],
-                    dt,
-                )
+                let (g, p) = (fluidity.value[n], pressure.value[n]);
+                params.advance_node(g, laplacian[n], ratio.value[n] * (p + gdt * g), p, dt)
             }));
         scratch.increment.clear();
         scratch.increment.par_extend(
@@ -615,7 +628,7 @@ pub fn advance_fluidity(
         });
         *nodal.field_mut("fluidity") = fluidity;
         *nodal.field_mut("trial_pressure") = pressure;
-        *nodal.field_mut("trial_shear") = shear;
+        *nodal.field_mut("trial_ratio") = ratio;
         nodal.field_mut("fluidity_laplacian").value = laplacian;
     }
 }
