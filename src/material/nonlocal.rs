@@ -59,7 +59,9 @@
 //! rest may still carry a small part the grid cannot see, of either sign.) Disconnected
 //! points carry no fluidity and are left out of the scatter; a point that reconnects takes
 //! the nodes' new fluidity interpolated to it, or the seed (if its ratio is above `mu_s`)
-//! where no node of its footprint is active. Where the
+//! where no node of its footprint is active. A dense point that no active node reaches (a
+//! clump too small to fill an eighth of any node's support) keeps its `g` unchanged and
+//! returns with it: it is outside the field. Where the
 //! stress exceeds `mu_2` no seed is needed: no `g` short of the one bringing `mu` below
 //! `mu_2` solves the equation. A nodal fluidity below `REST` (`1e-12`) times the rate scale
 //! `sqrt(p/rho_s)/d`, or too small to change the stress in floating point, is set to zero, so
@@ -556,7 +558,7 @@ pub fn advance_fluidity(
         });
         let fixed = grid_field::laplacian(&grid, &mut fluidity, &walls, &mut laplacian);
         // Each point's ratio if it returned with the fluidity its cell has now: the node's
-        // ratio at its own fluidity is their mean (module docs, "The node's ratio").
+        // ratio at its own fluidity is their mean (module docs, step 1).
         let gdt = params.base.shear * dt;
         grid_field::scatter(&grid, location, bands, &mut ratio, |k| {
             dense(k).map(|(v, p, tau)| {
