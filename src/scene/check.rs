@@ -15,7 +15,6 @@ use glam::DVec2;
 const MAX_CELLS: usize = 20_000_000;
 const MAX_POINTS: usize = 50_000_000;
 
-/// The 1-based line of the first occurrence of `needle` in `text`, if any.
 /// Fewer material points than this in a body draw a resolution warning.
 pub const MIN_POINTS: usize = 100;
 /// Fewer cells than this across a body's smallest extent draw a resolution warning.
@@ -97,11 +96,27 @@ impl Scene {
                 let points = fill(&*b.shape, &grid, b.points_per_cell).positions.len();
                 let (lo, hi) = b.shape.bounds();
                 let extent = hi.min(grid.max()) - lo.max(grid.origin);
-                let across = extent.x.min(extent.y) / grid.cell_size;
-                (points < MIN_POINTS || across < MIN_CELLS_ACROSS).then(|| {
+                // A body exactly 4 cells across can come out as 3.999999999999998 of them
+                // (x from 0.46 to 0.5 on cells of 0.01): it meets the bound, and must not be
+                // told otherwise.
+                let across = extent.x.min(extent.y) / grid.cell_size * (1.0 + 1e-9);
+                let mut short = Vec::new();
+                if points < MIN_POINTS {
+                    short.push(format!(
+                        "{points} material points (at least {MIN_POINTS} are advised)"
+                    ));
+                }
+                if across < MIN_CELLS_ACROSS {
+                    short.push(format!(
+                        "{across:.2} cells across its smallest extent (at least \
+                         {MIN_CELLS_ACROSS} are advised)"
+                    ));
+                }
+                (!short.is_empty()).then(|| {
                     format!(
-                        "body \"{}\" is coarsely resolved: {points} material points, {across:.1} cells across its smallest extent (at least {MIN_POINTS} points and {MIN_CELLS_ACROSS} cells are advised){preset}",
-                        b.name
+                        "body \"{}\" is coarsely resolved: {}{preset}",
+                        b.name,
+                        short.join(" and ")
                     )
                 })
             })
