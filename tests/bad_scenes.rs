@@ -235,6 +235,16 @@ fn lithostatic_stress_needs_vertical_gravity() {
         );
     let err = Scene::parse(&text, "bad.ron", &Regolith::default().registries()).unwrap_err();
     assert!(err.message.contains("gravity along -y"), "{err}");
+    // Upward gravity too (issue 38: it passed the check).
+    let up = text.replace("gravity: (2.0, -9.81)", "gravity: (0.0, 9.81)");
+    let err = Scene::parse(&up, "bad.ron", &Regolith::default().registries()).unwrap_err();
+    assert!(
+        err.message.contains("gravity along -y") && err.message.contains("got (0, 9.81)"),
+        "{err}"
+    );
+    // No gravity is a column without weight: zero stress, allowed.
+    let none = text.replace("gravity: (2.0, -9.81)", "gravity: (0.0, 0.0)");
+    Scene::parse(&none, "ok.ron", &Regolith::default().registries()).unwrap();
 }
 
 #[test]

@@ -351,11 +351,15 @@ impl Scene {
             if !b.velocity.is_finite() {
                 return err("velocity must be two finite numbers (m/s)".to_string());
             }
-            if b.initial_stress == InitialStress::Lithostatic && self.gravity.x != 0.0 {
-                return err(
-                    "a lithostatic initial stress needs gravity along -y (gravity.x = 0)"
-                        .to_string(),
-                );
+            // Upward gravity would put the lithostatic column in tension from the bottom up.
+            if b.initial_stress == InitialStress::Lithostatic
+                && (self.gravity.x != 0.0 || self.gravity.y > 0.0)
+            {
+                return err(format!(
+                    "a lithostatic initial stress needs gravity along -y (gravity.x = 0, \
+                     gravity.y <= 0), got ({}, {})",
+                    self.gravity.x, self.gravity.y
+                ));
             }
             if let Some(k) = b.lateral_stress_ratio {
                 if !(k.is_finite() && k >= 0.0) {
