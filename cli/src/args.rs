@@ -95,9 +95,10 @@ pub(crate) enum Command {
     /// Run the coarse versions of the paper's experiments (reusing finished runs) and draw
     /// the paper's figures from them as PNG.
     Figures {
-        /// Where the figures go.
-        #[arg(long, default_value = "docs/figures")]
-        out: PathBuf,
+        /// Where the figures go [default: docs/figures; with --from DIR, DIR/figures, so a
+        /// sweep's figures never overwrite the repository's].
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Where the runs go (kept, and reused by the next call).
         #[arg(long, default_value = "out/figures")]
         runs: PathBuf,

@@ -94,12 +94,15 @@ pub fn main_with(app: Regolith) -> ExitCode {
             jobs,
             from,
         } => match from {
-            Some(dir) => regolith_lab::figures::depth_energy_from(&dir, &out),
+            Some(dir) => {
+                let out = out.unwrap_or_else(|| dir.join("figures"));
+                regolith_lab::figures::depth_energy_from(&dir, &out)
+            }
             None => regolith_lab::figures::make_figures(
                 &registries,
                 &scenes,
                 &runs,
-                &out,
+                &out.unwrap_or_else(|| std::path::PathBuf::from("docs/figures")),
                 jobs.map(|j| j as usize),
                 &|line: &str| println!("{line}"),
             ),

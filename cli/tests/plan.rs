@@ -135,6 +135,14 @@ fn a_plan_run_by_gnu_parallel_gives_the_local_sweep_bit_for_bit() {
         why.contains("no completed run with its intruder at rest to draw (4 left out)"),
         "{why}"
     );
+    // Without --out the figures go under the sweep, never into the repository's docs/figures
+    // (issue 38: they overwrote it).
+    let figures = regolith(&["figures", "--from", "plan"], dir.path());
+    assert!(!figures.status.success());
+    assert!(
+        !dir.path().join("docs").exists() && dir.path().join("plan/figures").is_dir(),
+        "figures --from plan wrote outside plan/"
+    );
     // The local sweep ran a plan of its own: collecting it rewrites the same table.
     let local_csv = std::fs::read_to_string(dir.path().join("local/sweep.csv")).unwrap();
     ok(&regolith(&["sweep", "--collect", "local"], dir.path()));
