@@ -492,9 +492,6 @@ enum Trial {
 #[derive(Default)]
 pub struct FluidityScratch {
     trials: Vec<Trial>,
-    /// Per point: the interpolated new fluidity, the interpolated increment, and whether
-    /// any node of the footprint is active.
-    interpolated: Vec<(f64, f64, bool)>,
     next: Vec<f64>,
     increment: Vec<f64>,
 }
@@ -592,36 +589,31 @@ pub fn advance_fluidity(
                 .map(|(new, old)| new - old),
         );
         let (next, increment) = (&scratch.next, &scratch.increment);
-        scratch.interpolated.clear();
-        scratch
-            .interpolated
-            .par_extend((0..trials.len()).into_par_iter().map(
-                |k| match grid_field::gather_active(location, &fluidity, [next, increment], k) {
-                    Some([g, dg]) => (g, dg, true),
-                    None => (0.0, 0.0, false),
-                },
-            ));
-        // The points: the increment on dense ones, the nodes' fluidity on reconnecting ones.
-        let interpolated = &scratch.interpolated;
-        history
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, history)| match trials[k] {
+        // The points: the increment on dense ones, the nodes' fluidity on reconnecting ones
+        // (over the active nodes of their footprints; a point that reaches none keeps its `g`,
+        // or is seeded if it reconnects).
+        history.par_iter_mut().enumerate().for_each(|(k, history)| {
+            let interpolated =
+                || grid_field::gather_active(location, &fluidity, [next, increment], k);
+            match trials[k] {
                 Trial::Out => {}
                 // Not clipped at zero: the point's `g` is the nodes' plus what the grid
                 // cannot see, which may be of either sign; only nodal values (and so
                 // `g_hat`) are kept non-negative, by the nodal solve.
-                Trial::Dense { .. } => history.fluidity += interpolated[k].1,
-                Trial::Reconnecting { p, tau } => {
-                    let (g_hat, _, reached) = interpolated[k];
-                    if reached {
-                        history.fluidity = g_hat;
-                        history.seeded = tau > params.base.mu_s * p;
-                    } else {
-                        params.seed(history, p, tau / p);
+                Trial::Dense { .. } => {
+                    if let Some([_, dg]) = interpolated() {
+                        history.fluidity += dg;
                     }
                 }
-            });
+                Trial::Reconnecting { p, tau } => match interpolated() {
+                    Some([g_hat, _]) => {
+                        history.fluidity = g_hat;
+                        history.seeded = tau > params.base.mu_s * p;
+                    }
+                    None => params.seed(history, p, tau / p),
+                },
+            }
+        });
         let history = &*history;
         // The return's fluidity: the nodes' at the centre of the point's cell (module docs).
         at_points.fill(0, |k| {

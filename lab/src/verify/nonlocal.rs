@@ -53,12 +53,11 @@ impl NonlocalLayer {
         let ad = material.amplitude * m.grain_diameter;
         let c = ad * ad / (h * h);
         let alpha = material.growth(mu);
-        let b = (m.mu_2 - m.mu_s) / m.i_0;
         // beta_k mu: the coefficient of g^2 at cell k.
         let quad: Vec<f64> = (0..cells)
             .map(|k| {
                 let p = m.critical_density * gravity * angle.cos() * (depth - (k as f64 + 0.5) * h);
-                b * m.grain_diameter * (m.grain_density / p).sqrt() * mu
+                quadratic(material, mu, p)
             })
             .collect();
         // Start from the local fluidity, alpha/(beta mu).
@@ -132,7 +131,6 @@ pub fn nodal_mean_speed(
     let ad = material.amplitude * m.grain_diameter;
     let c = ad * ad / (h * h);
     let alpha = material.growth(mu);
-    let b = (m.mu_2 - m.mu_s) / m.i_0;
     let points: Vec<f64> = (0..cells * points_per_cell)
         .map(|k| (k as f64 + 0.5) * h / points_per_cell as f64)
         .collect();
@@ -147,7 +145,7 @@ pub fn nodal_mean_speed(
                 sum += w * pressure(y);
                 weight += w;
             }
-            b * m.grain_diameter * (m.grain_density / (sum / weight)).sqrt() * mu
+            quadratic(material, mu, sum / weight)
         })
         .collect();
     let top = cells - 1;
@@ -191,6 +189,14 @@ pub fn nodal_mean_speed(
         .sum::<f64>()
         / points.len() as f64;
     Some(mean)
+}
+
+/// The steady equation's `g^2` coefficient at ratio `mu` and pressure `p`,
+/// `b sqrt(rho_s d^2/p) mu` with `b = (mu_2 - mu_s)/I_0`.
+fn quadratic(material: &Nonlocal, mu: f64, p: f64) -> f64 {
+    let m = &material.base;
+    let b = (m.mu_2 - m.mu_s) / m.i_0;
+    b * m.grain_diameter * (m.grain_density / p).sqrt() * mu
 }
 
 /// Newton's method for `F(g) = 0` whose Jacobian is symmetric tridiagonal with `c` off the
