@@ -27,7 +27,7 @@
 //! elastic trial stress) runs in `GridToParticle`, after its core systems: the footprints
 //! are still the start of the step's (the velocity gradient was gathered with them), but the
 //! bands have been rebuilt for the moved points, so such a field scatters with the bands kept
-//! from the start of the step ([`StartBands`], [`keep_start_bands`]). A material declares the
+//! from the start of the step ([`StartBands`]). A material declares the
 //! columns it reads ([`crate::material::Material::point_fields`]) and adds the systems that
 //! fill them ([`crate::material::Material::add_field_systems`]).
 
@@ -118,19 +118,11 @@ impl PointFields {
 }
 
 /// A body's bands as they were when its footprints were found (component): the scatter of a
-/// field computed after the move, when [`Bands`] already describes the moved points.
+/// field computed after the move, when [`Bands`] already describes the moved points. A
+/// material whose field runs after the move copies them in `ParticleToGrid`, after its core
+/// (`material::nonlocal::keep_start_bands`).
 #[derive(Component, Clone, Debug, Default)]
 pub struct StartBands(pub Bands);
-
-/// Keeps the start of the step's bands of every body of material `M` ([`StartBands`]): added
-/// to `ParticleToGrid` after its core by a material whose field runs after the move.
-pub fn keep_start_bands<M: crate::material::Material>(
-    mut bodies: Query<(&Bands, &mut StartBands), With<crate::material::MaterialState<M>>>,
-) {
-    for (bands, mut kept) in &mut bodies {
-        kept.0.clone_from(bands);
-    }
-}
 
 /// What a wall imposes on a grid field at its nodes.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]

@@ -79,7 +79,7 @@ use crate::grid::GridGeometry;
 use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields, StartBands};
 use crate::registry::Item;
 use crate::resources::{Boundaries, Clock, Wall, Walls};
-use crate::step::{Core, Location, StepSet};
+use crate::step::{Bands, Core, Location, StepSet};
 use crate::stress::Stress;
 
 /// The nonlocal amplitude `A` unless the scene gives one: Henann & Kamrin's (2013) calibration
@@ -447,7 +447,7 @@ impl Material for Nonlocal {
     }
     fn add_field_systems(schedule: &mut Schedule) {
         schedule.add_systems((
-            grid_field::keep_start_bands::<Nonlocal>
+            keep_start_bands
                 .in_set(StepSet::ParticleToGrid)
                 .after(Core(StepSet::ParticleToGrid)),
             advance_fluidity
@@ -475,6 +475,17 @@ type FluidityBody<'a> = (
     &'a mut GridFields,
     &'a mut PointFields,
 );
+
+/// Keeps the bands of every body of this material as they are when its footprints are found
+/// ([`StartBands`]): the fluidity is scattered after the move, when the bands describe the
+/// moved points.
+pub fn keep_start_bands(
+    mut bodies: Query<(&Bands, &mut StartBands), With<MaterialState<Nonlocal>>>,
+) {
+    for (bands, mut kept) in &mut bodies {
+        kept.0.clone_from(bands);
+    }
+}
 
 /// What the fluidity's step knows of a point after its elastic trial.
 #[derive(Clone, Copy, Debug, Default)]
