@@ -70,7 +70,9 @@ pub(crate) enum Command {
     },
     /// Fit the Poncelet drag law m z'' = m g - f(z) - h(z) z'^2 across runs of one shape at
     /// three or more speeds (the paper's section 4.2), writing
-    /// depth,f,h,runs,residual,f_error,h_error,condition as CSV.
+    /// depth,f,h,runs,residual,f_error,h_error,condition as CSV. Runs whose scenes differ
+    /// in more than the intruder's speed (two shapes of one sweep) are fitted as separate
+    /// groups, one table each.
     Fit {
         /// Run directories, or sweep output directories (all their runs).
         #[arg(required = true)]
@@ -87,10 +89,18 @@ pub(crate) enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// Take z' and z'' from a least-squares parabola over this window (s) around each
-        /// t_k instead of the interpolating spline (the paper's way); it averages out
-        /// oscillations shorter than the window, such as grid-crossing pulses.
-        #[arg(long, value_name = "SECONDS")]
+        /// t_k; it averages out oscillations shorter than the window.
+        #[arg(long, value_name = "SECONDS", conflicts_with_all = ["cells", "spline"])]
         window: Option<f64>,
+        /// Take z' and z'' from a least-squares parabola over the samples within N/2 cells
+        /// of depth of each z_k [default: 3]: the grid's pulses, one per cell crossed, are
+        /// averaged over N of them at every speed.
+        #[arg(long, value_name = "N", conflicts_with = "spline")]
+        cells: Option<f64>,
+        /// Take z' and z'' from the interpolating spline, as the paper does (grid-crossing
+        /// pulses then become noise in z'').
+        #[arg(long)]
+        spline: bool,
     },
     /// Run the coarse versions of the paper's experiments (reusing finished runs) and draw
     /// the paper's figures from them as PNG.

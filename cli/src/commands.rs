@@ -202,23 +202,35 @@ pub(crate) fn resume(
     Ok(())
 }
 
+/// `--window`, `--cells` and `--spline` of `regolith fit`.
+type MethodFlags = (Option<f64>, Option<f64>, bool);
+
 pub(crate) fn fit(
     dirs: &[PathBuf],
     body: &str,
     depths: Option<&str>,
     out: Option<PathBuf>,
-    window: Option<f64>,
+    (window, cells, spline): MethodFlags,
 ) -> Result<(), Error> {
     use regolith_lab::poncelet::{
-        Derivatives, MIN_SPEEDS, default_depths, default_table, expand_dirs, fit, load_run,
-        refuse_duplicates, to_csv,
+        DEFAULT_CELLS, Derivatives, MIN_SPEEDS, NOT_PHYSICAL, default_depths, default_table,
+        expand_dirs, fit, group_by_scene, load_run, refuse_duplicates, to_csv,
     };
     let fail = |m: String| Error::Scene(SceneError::file("regolith fit", m));
-    let how = match window {
-        None => Derivatives::Spline,
-        Some(w) if w.is_finite() && w > 0.0 => Derivatives::Window(w),
-        Some(w) => return Err(fail(format!("--window must be a positive time, got {w}"))),
+    let positive = |flag: &str, w: f64| {
+        if w.is_finite() && w > 0.0 {
+            Ok(w)
+        } else {
+            Err(fail(format!("{flag} must be positive, got {w}")))
+        }
     };
+    let chosen = match (window, cells, spline) {
+        (Some(w), _, _) => Some(Derivatives::Window(positive("--window", w)?)),
+        (_, Some(n), _) => Some(Derivatives::Cells(positive("--cells", n)?)),
+        (_, _, true) => Some(Derivatives::Spline),
+        _ => None,
+    };
+    let how = chosen.unwrap_or(Derivatives::Cells(DEFAULT_CELLS));
     let table = out.unwrap_or_else(|| default_table(&dirs[0]));
     let dirs = expand_dirs(dirs).map_err(fail)?;
     let runs = dirs
@@ -227,34 +239,103 @@ pub(crate) fn fit(
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
     refuse_duplicates(&dirs, &runs).map_err(fail)?;
-    if runs.len() < MIN_SPEEDS {
+    if let (Derivatives::Cells(_), Some(old)) = (how, runs.iter().find(|r| r.cell_size.is_none())) {
         return Err(fail(format!(
-            "the fit needs runs at {MIN_SPEEDS} or more speeds (two unknowns per depth; with two speeds the line fits exactly and nothing checks the law), got {} run(s)",
-            runs.len()
+            "{}: its summary.json has no cell_size (written by an older regolith), which a window in cells needs; give --window SECONDS or --spline",
+            old.label
         )));
     }
-    let depths = match depths {
-        Some(spec) => parse_depths(spec).map_err(|e| fail(format!("--depths {spec}: {e}")))?,
-        None => default_depths(&runs),
+    let groups = group_by_scene(&runs);
+    let several = groups.len() > 1;
+    if several {
+        println!(
+            "{} runs of {} scenes (they differ in more than the intruder's speed): each is fitted alone",
+            runs.len(),
+            groups.len()
+        );
+    }
+    let mut refused = Vec::new();
+    for (k, group) in groups.iter().enumerate() {
+        let members: Vec<_> = group.runs.iter().map(|&i| runs[i].clone()).collect();
+        let name = match &group.differs {
+            Some(differs) => format!(
+                "group {} ({differs}: {}{})",
+                k + 1,
+                members[0].label,
+                match members.len() {
+                    1 => String::new(),
+                    n => format!(" and {} more", n - 1),
+                }
+            ),
+            None => "the runs".to_string(),
+        };
+        if members.len() < MIN_SPEEDS {
+            refused.push(format!(
+                "{name}: a fit needs runs at {MIN_SPEEDS} or more speeds (two unknowns per depth; with two speeds the line fits exactly and nothing checks the law), got {} run(s)",
+                members.len()
+            ));
+            continue;
+        }
+        let depths = match depths {
+            Some(spec) => parse_depths(spec).map_err(|e| fail(format!("--depths {spec}: {e}")))?,
+            None => default_depths(&members),
+        };
+        let points = fit(&members, &depths, how);
+        if points.is_empty() {
+            refused.push(format!(
+                "{name}: none of the {} depths is reached while descending by runs at {MIN_SPEEDS} or more distinct speeds; nothing written",
+                depths.len()
+            ));
+            continue;
+        }
+        let unphysical = points.iter().filter(|p| !p.is_physical()).count();
+        if unphysical > 0 && chosen.is_none() {
+            let hint = regolith_lab::poncelet::physical_hint(&members, &depths, &points);
+            refused.push(format!(
+                "{name}: with {how}, {unphysical} of {} depths give {NOT_PHYSICAL} (not a drag law); {hint}; nothing written",
+                points.len()
+            ));
+            continue;
+        }
+        let out = if several {
+            numbered(&table, k + 1)
+        } else {
+            table.clone()
+        };
+        regolith::output::write_atomic(&out, to_csv(&points).as_bytes())
+            .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;
+        let caution = if unphysical > 0 {
+            format!(" (warning: {unphysical} of them give {NOT_PHYSICAL})")
+        } else {
+            String::new()
+        };
+        println!(
+            "{}{} runs, {} of {} depths fitted with {how}{caution}; table in {}",
+            if several {
+                format!("{name}: ")
+            } else {
+                String::new()
+            },
+            members.len(),
+            points.len(),
+            depths.len(),
+            out.display()
+        );
+    }
+    match refused.len() {
+        0 => Ok(()),
+        _ => Err(fail(refused.join("\n"))),
+    }
+}
+
+/// `poncelet.csv` -> `poncelet_2.csv`: the table of group `k` when runs form several.
+fn numbered(table: &Path, k: usize) -> PathBuf {
+    let stem = table.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match table.extension() {
+        Some(ext) => format!("{stem}_{k}.{}", ext.to_string_lossy()),
+        None => format!("{stem}_{k}"),
     };
-    let points = fit(&runs, &depths, how);
-    if points.is_empty() {
-        return Err(fail(format!(
-            "none of the {} depths is reached while descending by runs at {MIN_SPEEDS} or more distinct speeds; nothing written",
-            depths.len()
-        )));
-    }
-    let out = table;
-    regolith::output::write_atomic(&out, to_csv(&points).as_bytes())
-        .map_err(|e| Error::io(format!("cannot write {}", out.display()), e))?;
-    println!(
-        "{} runs, {} of {} depths fitted; table in {}",
-        runs.len(),
-        points.len(),
-        depths.len(),
-        out.display()
-    );
-    Ok(())
+    table.with_file_name(name)
 }
 
 pub(crate) fn check(

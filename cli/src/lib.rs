@@ -86,7 +86,15 @@ pub fn main_with(app: Regolith) -> ExitCode {
             depths,
             out,
             window,
-        } => fit(&runs, &body, depths.as_deref(), out, window),
+            cells,
+            spline,
+        } => fit(
+            &runs,
+            &body,
+            depths.as_deref(),
+            out,
+            (window, cells, spline),
+        ),
         Command::Figures {
             out,
             runs,

@@ -391,29 +391,36 @@ fn run_writes_vtk_files_with_one_flag() {
     );
 }
 
+/// A synthetic run of a constant deceleration (f only, h = 0), z = v0 t - a t^2 / 2 with
+/// a = 20 m/s^2, written as `regolith run` writes a run (with `scene` as its scene.ron).
+fn write_decelerating_run(run: &Path, v0: f64, scene: Option<&str>) {
+    std::fs::create_dir_all(run).unwrap();
+    let a = 20.0;
+    let mut csv = String::from("t,intruder_x,intruder_y,intruder_vx,intruder_vy\n");
+    let mut t = 0.0;
+    while v0 - a * t > 0.0 {
+        let z = v0 * t - 0.5 * a * t * t;
+        csv.push_str(&format!("{t},0.5,{},0,{}\n", 0.6 - z, -(v0 - a * t)));
+        t += 1e-3;
+    }
+    std::fs::write(run.join("trajectory.csv"), csv).unwrap();
+    std::fs::write(
+        run.join("summary.json"),
+        r#"{"status": "completed", "gravity": [0.0, -9.81], "cell_size": 0.01,
+            "bodies": [{"name": "intruder", "mass": 2.0}], "impact": {"contact_time": 0.0}}"#,
+    )
+    .unwrap();
+    if let Some(scene) = scene {
+        std::fs::write(run.join("scene.ron"), scene).unwrap();
+    }
+}
+
 /// `regolith fit` on run directories: writes the table, and says clearly when it cannot fit.
 #[test]
 fn fit_writes_a_table_or_says_why_not() {
     let dir = tempfile::tempdir().unwrap();
-    // Three synthetic runs of a constant deceleration (f only, h = 0): z = v0 t - a t^2 / 2.
     for (k, v0) in [2.0f64, 3.0, 4.0].iter().enumerate() {
-        let run = dir.path().join(format!("run{k}"));
-        std::fs::create_dir_all(&run).unwrap();
-        let a = 20.0;
-        let mut csv = String::from("t,intruder_x,intruder_y,intruder_vx,intruder_vy\n");
-        let mut t = 0.0;
-        while v0 - a * t > 0.0 {
-            let z = v0 * t - 0.5 * a * t * t;
-            csv.push_str(&format!("{t},0.5,{},0,{}\n", 0.6 - z, -(v0 - a * t)));
-            t += 1e-3;
-        }
-        std::fs::write(run.join("trajectory.csv"), csv).unwrap();
-        std::fs::write(
-            run.join("summary.json"),
-            r#"{"status": "completed", "gravity": [0.0, -9.81],
-                "bodies": [{"name": "intruder", "mass": 2.0}], "impact": {"contact_time": 0.0}}"#,
-        )
-        .unwrap();
+        write_decelerating_run(&dir.path().join(format!("run{k}")), *v0, None);
     }
     let run = |k: usize| dir.path().join(format!("run{k}"));
     let arg = |p: &Path| p.to_str().unwrap().to_string();
@@ -462,6 +469,66 @@ fn fit_writes_a_table_or_says_why_not() {
     let o = regolith(&["fit", "/nonexistent/run"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("summary.json"), "{err}");
+}
+
+/// Runs of two shapes given together (one sweep over slope and speed) are fitted as two
+/// groups, each alone with its own table, and the output says which is which; a group with
+/// too few speeds is refused by name while the other is still written.
+#[test]
+fn fit_fits_each_shape_of_a_mixed_sweep_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |slope: &str, v: f64| {
+        format!(
+            "// shape {slope}\nScene(\n    time: (end: 0.3),\n    bodies: [(name: \"intruder\", shape: Tip(slope: {slope}), velocity: (0.0, -{v}))],\n)\n"
+        )
+    };
+    let mut args = vec!["fit".to_string()];
+    for (k, (slope, v0)) in [
+        ("1.0", 2.0),
+        ("2.0", 2.0),
+        ("1.0", 3.0),
+        ("2.0", 3.0),
+        ("1.0", 4.0),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let run = dir.path().join(format!("run{k}"));
+        write_decelerating_run(&run, *v0, Some(&scene(slope, *v0)));
+        args.push(run.to_str().unwrap().to_string());
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = regolith(&args);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(!o.status.success(), "{out}");
+    assert!(
+        out.contains("5 runs of 2 scenes")
+            && out.contains("group 1 (slope:1.0: ")
+            && out.contains("3 runs, 20 of 20 depths fitted"),
+        "{out}"
+    );
+    assert!(
+        err.contains("group 2 (slope:2.0: ") && err.contains("got 2 run(s)"),
+        "{err}"
+    );
+    assert!(dir.path().join("poncelet_1.csv").is_file());
+    assert!(!dir.path().join("poncelet_2.csv").exists());
+    assert!(!dir.path().join("poncelet.csv").exists());
+    // A third speed of the second shape: both are fitted.
+    let run = dir.path().join("run5");
+    write_decelerating_run(&run, 4.0, Some(&scene("2.0", 4.0)));
+    let mut all = args.clone();
+    all.push(run.to_str().unwrap());
+    let o = regolith(&all);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.path().join("poncelet_2.csv").is_file());
+    // Runs of one shape: one table as before, under its usual name.
+    let o = regolith(&[args[0], args[1], args[3], args[5]]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.path().join("poncelet.csv").is_file());
 }
 
 /// A run that ends while the intruder still moves reports no final depth or stopping

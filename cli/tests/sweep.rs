@@ -65,3 +65,58 @@ fn a_sweep_runs_the_cross_product_and_resumes() {
         "{again}"
     );
 }
+
+/// The shipped Poncelet sweep (`sweeps/poncelet_s1_coarse.ron`, four speeds of the s = 1
+/// intruder on the coarse grid) fitted at the default gives a drag law at every depth:
+/// f and h positive and each known to better than itself. The paper's spline, the default
+/// before, turns the coarse grid's crossing pulses into a negative f at some depths, and
+/// `fit` says so.
+#[test]
+fn the_shipped_poncelet_sweep_fits_a_physical_law_at_the_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = dir.path().join("pon");
+    let regolith = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_regolith"))
+            .current_dir(&root)
+            .args(args)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(
+            o.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        text
+    };
+    let out_arg = out.to_str().unwrap();
+    regolith(&[
+        "sweep",
+        "sweeps/poncelet_s1_coarse.ron",
+        "--out",
+        out_arg,
+        "--jobs",
+        "2",
+    ]);
+    let said = regolith(&["fit", out_arg]);
+    assert!(
+        said.contains("4 runs, 20 of 20 depths fitted") && !said.contains("warning"),
+        "{said}"
+    );
+    let table = std::fs::read_to_string(out.join("poncelet.csv")).unwrap();
+    for row in table.lines().skip(1) {
+        let v: Vec<f64> = row.split(',').map(|c| c.parse().unwrap()).collect();
+        let (f, h, f_error, h_error) = (v[1], v[2], v[5], v[6]);
+        assert!(f > 0.0 && h > 0.0 && f_error < f && h_error < h, "{row}");
+    }
+    let spline = out.join("spline.csv");
+    let said = regolith(&[
+        "fit",
+        out_arg,
+        "--spline",
+        "--out",
+        spline.to_str().unwrap(),
+    ]);
+    assert!(said.contains("warning"), "{said}");
+}

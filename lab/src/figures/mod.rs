@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::plan::BatchFile;
-use crate::poncelet::{Derivatives, fit, load_run};
+use crate::poncelet::{DEFAULT_CELLS, Derivatives, fit, load_run};
 use crate::sweep::Sweep;
 use crate::workers::run_local;
 use regolith::error::{Error, SceneError};
@@ -175,9 +175,10 @@ pub fn make_figures(
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| fail("Poncelet fit", e))?;
     let depths = crate::poncelet::default_depths(&poncelet_runs);
-    // Derivatives over an 18 ms window: the interpolating spline of the paper turns the
-    // coarse grid's crossing pulses into noise (docs/VALIDATION.md).
-    let terms = fit(&poncelet_runs, &depths, Derivatives::Window(0.018));
+    // `regolith fit`'s default, derivatives over three cells of depth: the interpolating
+    // spline of the paper turns the coarse grid's crossing pulses into noise
+    // (docs/VALIDATION.md).
+    let terms = fit(&poncelet_runs, &depths, Derivatives::Cells(DEFAULT_CELLS));
     let f: Vec<_> = terms.iter().map(|p| (p.depth, p.f, p.f_error)).collect();
     let h: Vec<_> = terms.iter().map(|p| (p.depth, p.h, p.h_error)).collect();
     draw(
@@ -185,7 +186,7 @@ pub fn make_figures(
         plot::curves(
             &out.join("poncelet_f.png"),
             &format!(
-                "Poncelet f(z), s = 1.5, {} speeds, 18 ms window fit (paper Fig. 4 left); COARSE, {shape_cost:.0} s",
+                "Poncelet f(z), s = 1.5, {} speeds, 3-cell window fit (paper Fig. 4 left); COARSE, {shape_cost:.0} s",
                 shape.len()
             ),
             "depth z (m)",
@@ -198,7 +199,7 @@ pub fn make_figures(
         plot::curves(
             &out.join("poncelet_h.png"),
             &format!(
-                "Poncelet h(z), s = 1.5, {} speeds, 18 ms window fit (paper Fig. 4 right); COARSE, {shape_cost:.0} s",
+                "Poncelet h(z), s = 1.5, {} speeds, 3-cell window fit (paper Fig. 4 right); COARSE, {shape_cost:.0} s",
                 shape.len()
             ),
             "depth z (m)",

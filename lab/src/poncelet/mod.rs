@@ -15,7 +15,9 @@ use regolith::linefit::line_fit;
 mod runs;
 mod spline;
 
-pub use runs::{default_table, expand_dirs, load_run, refuse_duplicates};
+pub use runs::{
+    SceneGroup, default_table, expand_dirs, group_by_scene, load_run, refuse_duplicates,
+};
 pub use spline::CubicSpline;
 
 /// One run's trajectory as the fit needs it.
@@ -33,6 +35,12 @@ pub struct PonceletRun {
     pub z: Vec<f64>,
     /// The run's `state_hash` (summary.json), which tells the same run given twice.
     pub state_hash: Option<String>,
+    /// The grid's cell size (m; summary.json), the period in depth of the pulses a grid
+    /// adds as the intruder crosses its cells; `None` from an older regolith.
+    pub cell_size: Option<f64>,
+    /// What the run's scene is once the intruder's speed is taken out: runs with equal
+    /// keys are one shape, bed and numerics at several speeds (see [`group_by_scene`]).
+    pub scene_key: String,
 }
 
 impl PonceletRun {
@@ -78,7 +86,37 @@ pub struct PonceletPoint {
     /// Condition number of the least-squares problem (its columns `1` and `z'^2` scaled to
     /// unit length): large when the speeds at this depth hardly differ.
     pub condition: f64,
+    /// Mean over the runs of the measured force `m (g - z'')` (N/m) and of `z'^2` (m^2/s^2):
+    /// the scales `f` and `h` are judged against.
+    pub mean_force: f64,
+    pub mean_v2: f64,
 }
+
+impl PonceletPoint {
+    /// Whether `f` and `h` at this depth are a drag law: neither is negative by more than
+    /// two standard errors (a resisting medium pushes back and its collisional term grows
+    /// with speed), and each is known to better than its own size (a standard error larger
+    /// than the value says the derivatives were noise, not a law).
+    /// (A standard error below 1e-9 of the term's share of the mean force is round-off:
+    /// exact data with `h = 0` is a law, and then only a negative value beyond round-off
+    /// is refused.)
+    pub fn is_physical(&self) -> bool {
+        let known = |value: f64, error: f64, scale: f64| {
+            let round_off = 1e-9 * scale.abs();
+            if error <= round_off {
+                value > -round_off
+            } else {
+                value > -2.0 * error && error < value.abs()
+            }
+        };
+        known(self.f, self.f_error, self.mean_force)
+            && known(self.h, self.h_error, self.mean_force / self.mean_v2)
+    }
+}
+
+/// What [`PonceletPoint::is_physical`] refuses, in the words of messages.
+pub const NOT_PHYSICAL: &str =
+    "f or h negative beyond two standard errors, or with a standard error larger than itself";
 
 /// Distinct speeds a depth needs before it is fitted. Two unknowns per depth: with two
 /// speeds the line passes exactly through both points, the residual is zero whatever the
@@ -96,19 +134,107 @@ pub enum Derivatives {
     /// deceleration pulses each time the intruder crosses a cell), at the price of bias where
     /// the acceleration changes within the window.
     Window(f64),
+    /// From a least-squares parabola through the descending samples within half this many
+    /// cells of depth of `z_k`: the grid's pulses are periodic in depth, one per cell
+    /// crossed, so a window in cells spans the same number of pulse periods at every speed
+    /// (a window in seconds spans fewer at lower speed). The default, at
+    /// [`DEFAULT_CELLS`].
+    Cells(f64),
+}
+
+/// The default window of [`Derivatives::Cells`]: three cells of depth, three pulse periods,
+/// the length that averaged out the pulses best on synthetic runs (`lab/tests/poncelet.rs`,
+/// docs/VALIDATION.md "Poncelet").
+pub const DEFAULT_CELLS: f64 = 3.0;
+
+impl Derivatives {
+    /// The `regolith fit` flag that selects it.
+    pub fn flag(&self) -> String {
+        match self {
+            Derivatives::Spline => "--spline".to_string(),
+            Derivatives::Window(w) => format!("--window {w}"),
+            Derivatives::Cells(n) => format!("--cells {n}"),
+        }
+    }
+}
+
+/// The first of wider cell windows (5, 8, 12 cells), then the spline, that gives physical
+/// values ([`PonceletPoint::is_physical`]) at every fitted depth: what `regolith fit`
+/// proposes when its default does not.
+pub fn physical_method(runs: &[PonceletRun], depths: &[f64]) -> Option<Derivatives> {
+    [
+        Derivatives::Cells(5.0),
+        Derivatives::Cells(8.0),
+        Derivatives::Cells(12.0),
+        Derivatives::Spline,
+    ]
+    .into_iter()
+    .find(|&how| {
+        let points = fit(runs, depths, how);
+        !points.is_empty() && points.iter().all(PonceletPoint::is_physical)
+    })
+}
+
+/// What to tell a user whose fit with `how` gave `points` of which some are not physical:
+/// the depths from which on they all are (when the bad ones are the shallowest, as where a
+/// flat face's contact transient is no Poncelet law), and a wider window that makes every
+/// depth physical, with its length in depth (it averages over that much and biases
+/// accordingly).
+pub fn physical_hint(runs: &[PonceletRun], depths: &[f64], points: &[PonceletPoint]) -> String {
+    let mut hints = Vec::new();
+    if let Some(first) = points.iter().rposition(|p| !p.is_physical()).map(|i| i + 1)
+        && first < points.len()
+        && points[first..].iter().all(PonceletPoint::is_physical)
+    {
+        let (lo, hi) = (points[first].depth, points[points.len() - 1].depth);
+        hints.push(format!(
+            "f and h are physical from {:.1} cm down (--depths {lo:.4}:{hi:.4}:{})",
+            100.0 * lo,
+            points.len() - first
+        ));
+    }
+    if let Some(how) = physical_method(runs, depths) {
+        let cell = runs.iter().filter_map(|r| r.cell_size).fold(0.0, f64::max);
+        let span = match how {
+            Derivatives::Cells(n) => {
+                format!(", which averages over {:.1} cm of depth", 100.0 * n * cell)
+            }
+            _ => String::new(),
+        };
+        hints.push(format!("at every depth with {how} ({}){span}", how.flag()));
+    }
+    match hints.len() {
+        0 => "no window of 5 to 12 cells, nor the spline, makes every depth physical: the runs are too noisy for a drag law (a finer grid, or more speeds)".to_string(),
+        _ => hints.join(", or "),
+    }
+}
+
+impl std::fmt::Display for Derivatives {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            Derivatives::Spline => write!(f, "the interpolating spline"),
+            Derivatives::Window(w) => write!(f, "a window of {w} s"),
+            Derivatives::Cells(n) => write!(f, "a window of {n} cells"),
+        }
+    }
 }
 
 /// Slope and curvature (`z'`, `z''`) at `tk` of the least-squares parabola through the
-/// samples within `half` of it; `None` with fewer than four samples.
-fn local_parabola(t: &[f64], z: &[f64], tk: f64, half: f64) -> Option<(f64, f64)> {
+/// samples `(t, z)` that `keep` accepts; `None` with fewer than four samples.
+fn local_parabola(
+    t: &[f64],
+    z: &[f64],
+    tk: f64,
+    keep: impl Fn(f64, f64) -> bool,
+) -> Option<(f64, f64)> {
     let mut m = [[0.0f64; 3]; 3];
     let mut r = [0.0f64; 3];
     let mut count = 0;
     for (&ti, &zi) in t.iter().zip(z) {
-        let tau = ti - tk;
-        if tau.abs() > half {
+        if !keep(ti, zi) {
             continue;
         }
+        let tau = ti - tk;
         count += 1;
         let p = [1.0, tau, tau * tau];
         for a in 0..3 {
@@ -168,7 +294,14 @@ pub fn fit(runs: &[PonceletRun], depths: &[f64], how: Derivatives) -> Vec<Poncel
                         let (_, v, a) = s.eval(tk);
                         (v, a)
                     }
-                    Derivatives::Window(w) => local_parabola(&r.t, &r.z, tk, 0.5 * w)?,
+                    Derivatives::Window(w) => {
+                        local_parabola(&r.t, &r.z, tk, |t, _| (t - tk).abs() <= 0.5 * w)?
+                    }
+                    Derivatives::Cells(n) => {
+                        let (t, z) = r.descent();
+                        let half = 0.5 * n * r.cell_size?;
+                        local_parabola(t, z, tk, |_, z| (z - zk).abs() <= half)?
+                    }
                 };
                 Some((v * v, r.mass * (r.gravity - a)))
             })
@@ -212,6 +345,8 @@ fn fit_depth(depth: f64, rows: &[(f64, f64)]) -> Option<PonceletPoint> {
         f_error: (variance * (1.0 / n + mean * mean / sxx)).sqrt(),
         h_error: (variance / sxx).sqrt(),
         condition: ((1.0 + c) / (1.0 - c).max(f64::MIN_POSITIVE)).sqrt(),
+        mean_force: rows.iter().map(|r| r.1).sum::<f64>() / n,
+        mean_v2: mean,
     })
 }
 
@@ -235,10 +370,11 @@ mod tests {
     fn the_local_parabola_is_exact_for_parabolas() {
         let t: Vec<f64> = (0..50).map(|k| k as f64 * 1e-3).collect();
         let z: Vec<f64> = t.iter().map(|&x| 0.1 + 3.0 * x - 40.0 * x * x).collect();
-        let (v, a) = local_parabola(&t, &z, 0.02, 0.006).unwrap();
+        let within = |half: f64| move |t: f64, _| (t - 0.02f64).abs() <= half;
+        let (v, a) = local_parabola(&t, &z, 0.02, within(0.006)).unwrap();
         assert!((v - (3.0 - 80.0 * 0.02)).abs() < 1e-9 && (a + 80.0).abs() < 1e-6);
         assert_eq!(
-            local_parabola(&t, &z, 0.02, 0.001),
+            local_parabola(&t, &z, 0.02, within(0.001)),
             None,
             "three samples are too few"
         );
