@@ -13,7 +13,8 @@ use regolith::scene::Scene;
 /// recording asked for on the command line and one listed in a scene are the same thing.
 #[derive(clap::Args, Debug, Default)]
 pub(crate) struct RecordArgs {
-    /// Record the run for the Rerun viewer into FILE (.rrd).
+    /// Record the run for the Rerun viewer into FILE (.rrd); a relative FILE goes into the
+    /// run directory (as a scene's Rerun(file: ..) does), and the run's last lines say where.
     #[arg(long, value_name = "FILE")]
     pub(crate) rrd: Option<PathBuf>,
     /// Stream the recording to a Rerun viewer started from PATH (`rerun`).
@@ -57,15 +58,8 @@ impl RecordArgs {
     #[cfg(feature = "rerun")]
     fn recorder(&self) -> Result<Box<dyn Output>, String> {
         use regolith_rerun::{Field, Rerun};
-        let file = match &self.rrd {
-            Some(file) => Some(
-                std::path::absolute(file)
-                    .map_err(|e| format!("--rrd {}: {e}", file.display()))?
-                    .display()
-                    .to_string(),
-            ),
-            None => None,
-        };
+        // A relative path goes into the run directory, as a scene's `Rerun(file: ..)` does.
+        let file = self.rrd.as_ref().map(|f| f.display().to_string());
         let color = match &self.color {
             None => Field::default(),
             Some(name) => Field::parse(name).ok_or_else(|| {

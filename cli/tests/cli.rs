@@ -288,6 +288,43 @@ fn run_records_for_rerun_with_one_flag() {
     assert!(out.join("summary.json").exists() && out.join("trajectory.csv").exists());
 }
 
+/// `--rrd` with a relative path writes into the run directory (as the README and a
+/// scene's `Rerun(file: ..)` have it), never into the directory the command ran from, and
+/// the run's last line and summary.json say where the recording is.
+#[test]
+fn a_relative_rrd_goes_into_the_run_directory_and_is_named_at_the_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, cwd) = (dir.path().join("run"), dir.path().join("elsewhere"));
+    std::fs::create_dir_all(&cwd).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_regolith"))
+        .current_dir(&cwd)
+        .args([
+            "run",
+            scene_path("impact_tipped_coarse").to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "time.end=0.002",
+            "--out",
+            out.to_str().unwrap(),
+            "--rrd",
+            "rec.rrd",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("rec.rrd").is_file() && !cwd.join("rec.rrd").exists());
+    let said = String::from_utf8_lossy(&o.stdout);
+    let last = said.lines().last().unwrap_or_default();
+    let path = out.canonicalize().unwrap().join("rec.rrd");
+    assert!(
+        last.contains(&format!("recording: {}", path.display())),
+        "{said}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["recording"], path.display().to_string());
+}
+
 /// A scene that lists its own `Rerun(..)` output, run with `--rrd`: one recording is made
 /// (the command line's), and the run says that it replaced the scene's.
 #[test]

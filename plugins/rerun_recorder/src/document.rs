@@ -7,9 +7,10 @@ use std::path::Path;
 use regolith::body::{Body, BodyState, PointStates, Points};
 use regolith::grid::{GridField, GridGeometry};
 use rerun::RecordingStream;
+use rerun::blueprint::components::PlayState;
 use rerun::blueprint::{
-    Blueprint, ContainerLike, Horizontal, Spatial2DView, Tabs, TextDocumentView, TimeSeriesView,
-    Vertical,
+    Blueprint, ContainerLike, Horizontal, Spatial2DView, Tabs, TextDocumentView, TimePanel,
+    TimeSeriesView, Vertical,
 };
 
 use crate::record::domain_outline;
@@ -26,7 +27,7 @@ type BodyRow<'a> = (
 /// of the width; on the right the depth and velocity plots (both components in one plot, so
 /// a component that is zero by symmetry shows as a flat line beside the other rather than
 /// as round-off noise on its own axis), with the energy, contact force, acceleration, time
-/// step and scene document in tabs.
+/// step and scene document in tabs. The viewer opens on the `sim_time` timeline, paused.
 ///
 /// The plots list their entities by body: the viewer's entity filters take `/**` only at the
 /// end of a path, so `/plots/*/depth` would match nothing.
@@ -48,6 +49,13 @@ pub fn layout(bodies: &[(&str, bool)]) -> Blueprint {
             Vertical::new(right).into(),
         ])
         .with_column_shares([2.0, 1.0]),
+    )
+    // Simulated seconds, paused: a viewer left to follow the newest data keeps the plots on
+    // the last few hundred frames, where the descent is never seen.
+    .with_time_panel(
+        TimePanel::new()
+            .with_timeline("sim_time")
+            .with_play_state(PlayState::Paused),
     )
 }
 

@@ -40,6 +40,7 @@ mod record;
 use regolith::bevy_ecs::prelude::*;
 use regolith::carry::{Carried, carried, restored};
 use regolith::output::Output;
+use regolith::output::summary::Section;
 use regolith::plugin::{Install, Plugin, Regolith};
 use regolith::registry::Item;
 use regolith::step::StepSet;
@@ -102,6 +103,22 @@ impl Output for Rerun {
         let saved = restored(state)?;
         world.resource_mut::<record::Recorder>().restore(saved);
         Ok(())
+    }
+
+    /// `"recording"`: the file's absolute path, and the run's last lines say where it is
+    /// and how to open it.
+    fn summary(&self, world: &World) -> Section {
+        let Some(path) = world.resource::<record::Recorder>().file_path() else {
+            return Section::default();
+        };
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        let mut section = Section::entry("recording", path.display().to_string().into());
+        section.headline = Some(format!(
+            "recording: {} (open it with: rerun '{}')",
+            path.display(),
+            path.display()
+        ));
+        section
     }
 }
 

@@ -101,6 +101,11 @@ pub struct Recorder {
 }
 
 impl Recorder {
+    /// The file the recording is written to, once the first frame has opened it.
+    pub fn file_path(&self) -> Option<&std::path::Path> {
+        self.file.as_ref().map(|f| f.path.as_path())
+    }
+
     pub fn new(params: Rerun) -> Self {
         Recorder {
             params,

@@ -240,9 +240,22 @@ fn the_world_view_is_y_up_with_an_active_layout_and_a_scale_per_body() {
         vec![[1.0, -1.0, 1.0]],
         "the y mirror"
     );
+    let layout = store_chunks(&file, StoreKind::Blueprint);
+    assert!(!layout.is_empty(), "the layout is sent with the recording");
+    // The viewer opens on simulated seconds, paused, so the plots show the whole run (left
+    // to follow the newest data on the `step` timeline they showed its last frames only).
+    let panel: Vec<String> = layout
+        .iter()
+        .filter(|c| c.entity_path().to_string().contains("time_panel"))
+        .map(|c| format!("{c}"))
+        .collect();
+    let paused = format!(
+        "[{}]",
+        regolith_rerun::rerun::blueprint::components::PlayState::Paused as u8
+    );
     assert!(
-        !store_chunks(&file, StoreKind::Blueprint).is_empty(),
-        "the layout is sent with the recording"
+        panel.len() == 1 && panel[0].contains("[sim_time]") && panel[0].contains(&paused),
+        "time panel: {panel:?}"
     );
 
     // Each legend bar's top is its own body's 99th percentile of the recorded pressures.
