@@ -22,7 +22,7 @@ use crate::scene::Scene;
 use crate::sim::Simulation;
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 5;
+const FORMAT: u32 = 6;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {

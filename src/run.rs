@@ -17,6 +17,7 @@ use crate::carry::Partial;
 use crate::checkpoint::Checkpoint;
 use crate::error::{Error, Fault, SceneError};
 use crate::grid::GridField;
+use crate::output::health;
 use crate::output::summary::{BodySummary, Summary};
 use crate::output::write_atomic;
 use crate::resources::{Clock, StepRule};
@@ -219,6 +220,14 @@ pub fn summarize(
         .map(|(b, s, n)| BodySummary {
             // every body listed by `bodies` has points
             state_hash: sim.state_hash(&b.name).unwrap_or_default(),
+            health: b.inertial_scale.and_then(|_| {
+                let layer = scene
+                    .bodies
+                    .iter()
+                    .find(|spec| spec.name == b.name)
+                    .and_then(|spec| health::layer_bounds(spec.shape.bounds(), &grid));
+                sim.health(&b.name, layer)
+            }),
             name: b.name,
             material: b.material.to_string(),
             points: n,
@@ -255,9 +264,16 @@ pub fn summarize(
         .get_resource::<Partial>()
         .map_or(Vec::new(), |p| p.0.clone());
     headlines.extend(partial_because.iter().map(|why| format!("PARTIAL: {why}")));
+    let warnings: Vec<String> = bodies
+        .iter()
+        .filter_map(|b| b.health.as_ref().map(|h| h.warnings(&b.name)))
+        .flatten()
+        .collect();
+    headlines.extend(warnings.iter().map(|w| format!("WARNING: {w}")));
     Summary {
         sections,
         headlines,
+        warnings,
         units,
         scene: scene.name.clone(),
         scene_file: from.file.to_string(),

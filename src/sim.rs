@@ -317,6 +317,20 @@ impl Simulation {
         self.of_body(name)
     }
 
+    /// The health of the body called `name` (`output::health`); `layer` is its bottom and
+    /// top at the start when it is a layer.
+    pub fn health(
+        &mut self,
+        name: &str,
+        layer: Option<(f64, f64)>,
+    ) -> Option<crate::output::health::BodyHealth> {
+        let grid = self.grid().clone();
+        let mut q = self.world.query::<(&Body, &Points, &PointStates)>();
+        q.iter(&self.world)
+            .find(|(b, _, _)| b.name == name)
+            .map(|(_, p, s)| crate::output::health::BodyHealth::measure(p, s, &grid, layer))
+    }
+
     /// The `state_hash` of the body called `name`, as summary.json gives it: its points'
     /// fingerprint in 16 hex digits, equal exactly when two states are bitwise equal.
     pub fn state_hash(&mut self, name: &str) -> Option<String> {

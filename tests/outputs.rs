@@ -116,3 +116,54 @@ fn the_free_surface_starts_flat_opens_under_the_disc_and_follows_the_points() {
         }
     }
 }
+
+/// A layer that has compacted at constant point volume (here made so by hand: its points
+/// moved 10% closer to the bed with their volumes unchanged) completes with its health in
+/// the summary and a warning as the run's last line; the same layer untouched has none.
+#[test]
+fn a_compacted_layer_is_reported_in_the_summary_and_the_last_line() {
+    use regolith::run::{Provenance, summarize};
+    let scene = common::scene("chute_flow", &[]);
+    let from = Provenance {
+        file: "chute_flow.ron",
+        text: "",
+        overrides: &[],
+    };
+    let mut sim = Simulation::new(&scene);
+    let honest = summarize(&mut sim, &scene, &from, 0.0, "completed", None);
+    let health = honest.bodies[0]
+        .health
+        .clone()
+        .expect("a granular body's health");
+    assert!((health.bulk_volume_ratio - 1.0).abs() < 1e-3, "{health:?}");
+    assert!(health.height_drift.unwrap().abs() < 1e-3, "{health:?}");
+    assert!(honest.warnings.is_empty(), "{:?}", honest.warnings);
+    let layer = sim
+        .world
+        .query::<(&regolith::body::Body, &mut regolith::body::Points)>()
+        .iter_mut(&mut sim.world)
+        .next()
+        .unwrap()
+        .1
+        .into_inner();
+    for x in &mut layer.position {
+        x.y *= 0.9;
+    }
+    let sunk = summarize(&mut sim, &scene, &from, 0.0, "completed", None);
+    let health = sunk.bodies[0].health.clone().unwrap();
+    assert!(health.bulk_volume_ratio > 1.05, "{health:?}");
+    assert_eq!(sunk.warnings.len(), 2, "{:?}", sunk.warnings);
+    let last = sunk.headlines.last().unwrap();
+    assert!(
+        last.starts_with("WARNING: layer: the layer's thickness"),
+        "{last}"
+    );
+    let json = serde_json::to_value(&sunk).unwrap();
+    assert_eq!(json["warnings"].as_array().unwrap().len(), 2);
+    assert!(
+        json["bodies"][0]["health"]["bulk_volume_ratio"]
+            .as_f64()
+            .unwrap()
+            > 1.05
+    );
+}

@@ -86,7 +86,7 @@ fn run_writes_summary_and_trajectory() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "t,column_x,column_y,column_vx,column_vy"
+        "t,column_x,column_y,column_vx,column_vy,column_depth,column_fx,column_fy"
     );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())

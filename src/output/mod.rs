@@ -9,6 +9,7 @@
 pub mod flow_field;
 pub mod free_surface;
 pub mod front;
+pub mod health;
 pub mod impact;
 pub mod snapshots;
 pub mod summary;

@@ -3,6 +3,8 @@
 use std::collections::BTreeMap;
 
 use serde::Serialize;
+
+use crate::output::health::BodyHealth;
 use serde_json::{Map, Value};
 
 /// What a scene item (an output, a condition) adds to `summary.json`: entries under keys of
@@ -77,6 +79,9 @@ pub struct Summary {
     /// `pressure_front`, ...).
     #[serde(flatten)]
     pub sections: Map<String, Value>,
+    /// What passed a bound of `output::health` at the end (one sentence each; also the
+    /// run's last lines): a run that completed with a flow gone unphysical says so here.
+    pub warnings: Vec<String>,
     /// The lines the command prints after the run, one per item that has one.
     #[serde(skip)]
     pub headlines: Vec<String>,
@@ -99,6 +104,9 @@ pub struct BodySummary {
     /// `Points::fingerprint` of the final state, 16 hex digits: equal for two runs exactly
     /// when their final point states are bitwise equal.
     pub state_hash: String,
+    /// For a granular body: how honest its dense bulk still is (`output::health`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub health: Option<BodyHealth>,
 }
 
 /// The `units` map of `summary.json` for its own fields (items add theirs).

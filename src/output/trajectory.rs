@@ -1,8 +1,13 @@
 //! `trajectory.csv`: time and centre-of-mass position and velocity of each tracked body.
 //!
 //! Columns: `t`, then `<body>_x, <body>_y, <body>_vx, <body>_vy` per tracked body in scene
-//! order. Rows are kept in memory (tests read them) and, when the run writes files, appended
-//! and flushed to `trajectory.csv.part` as they are made, so a failed run keeps them.
+//! order, then `<body>_depth, <body>_fx, <body>_fy` per tracked body: the downward
+//! displacement of its centre of mass since the first row (m) and the force the other
+//! bodies exert on it through contact in the last step (N per metre of thickness; zero for
+//! a lone body). The later columns come after all the first ones, so a table's first
+//! columns are where they always were. Rows are kept in memory (tests read them) and, when
+//! the run writes files, appended and flushed to `trajectory.csv.part` as they are made, so
+//! a failed run keeps them.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -12,6 +17,7 @@ use bevy_ecs::prelude::*;
 
 use super::OutputFaults;
 use crate::body::{Body, BodyState};
+use crate::grid::GridField;
 use crate::resources::Clock;
 
 #[derive(Resource, Debug, Default)]
@@ -25,9 +31,11 @@ impl Trajectory {
     /// An empty table for the tracked bodies, by name in scene order.
     pub fn new(tracked: &[String]) -> Self {
         let mut columns = vec!["t".to_string()];
-        for name in tracked {
-            for q in ["x", "y", "vx", "vy"] {
-                columns.push(format!("{name}_{q}"));
+        for quantities in [["x", "y", "vx", "vy"].as_slice(), &["depth", "fx", "fy"]] {
+            for name in tracked {
+                for q in quantities {
+                    columns.push(format!("{name}_{q}"));
+                }
             }
         }
         Trajectory {
@@ -82,12 +90,12 @@ pub fn record_trajectory(
     clock: Res<Clock>,
     faults: Res<OutputFaults>,
     mut table: ResMut<Trajectory>,
-    bodies: Query<(&Body, &BodyState)>,
+    bodies: Query<(&Body, &BodyState, &GridField)>,
 ) {
-    let mut tracked: Vec<_> = bodies.iter().filter(|(b, _)| b.tracked).collect();
-    tracked.sort_by_key(|(b, _)| b.index);
+    let mut tracked: Vec<_> = bodies.iter().filter(|(b, _, _)| b.tracked).collect();
+    tracked.sort_by_key(|(b, _, _)| b.index);
     let mut row = vec![clock.time];
-    for (_, s) in tracked {
+    for (_, s, _) in &tracked {
         row.extend([
             s.centre_of_mass.x,
             s.centre_of_mass.y,
@@ -96,6 +104,18 @@ pub fn record_trajectory(
         ]);
     }
     let table = &mut *table;
+    for (k, (_, s, field)) in tracked.iter().enumerate() {
+        // Column of this body's y: after `t`, four per body.
+        let y0 = table
+            .rows
+            .first()
+            .map_or(s.centre_of_mass.y, |r| r[2 + 4 * k]);
+        row.extend([
+            y0 - s.centre_of_mass.y,
+            field.contact_force.x,
+            field.contact_force.y,
+        ]);
+    }
     if let Some((_, w)) = table.sink.as_mut()
         && let Err(e) = write_row(w, &row).and_then(|_| w.flush())
     {
