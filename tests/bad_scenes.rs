@@ -189,6 +189,26 @@ fn bad_scenes_give_their_messages() {
             r#"body "ball" must be tracked"#,
             Some(18),
         ),
+        // Found by the fuzz test once it required every planted fault to be refused: these
+        // three ran, recording nothing.
+        (
+            18,
+            r#"    ], outputs: [FreeSurface(body: "sand", every: 0.001)],"#,
+            r#"FreeSurface: body "sand" is not in the scene (its bodies: "block", "ball")"#,
+            Some(18),
+        ),
+        (
+            18,
+            r#"    ], outputs: [PressureFront(body: "sand", centre: (0.5, 0.4), radius: 0.2, bins: 4, every: 0.001)],"#,
+            r#"PressureFront: body "sand" is not in the scene"#,
+            Some(18),
+        ),
+        (
+            18,
+            r#"    ], outputs: [FlowField(body: "block", intruder: "disc", scale: 0.1, at: [0.005])],"#,
+            r#"FlowField: body "disc" is not in the scene"#,
+            Some(18),
+        ),
         (
             18,
             "    ], outputs: [Snapshots(every: 0.001),\n        Snapshots(every: 0.002)],",

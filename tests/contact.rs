@@ -2,6 +2,9 @@
 
 mod common;
 
+#[path = "common/property.rs"]
+mod property;
+
 use proptest::prelude::*;
 use regolith::Simulation;
 use regolith::contact::{NodeBody, frictional_impulses};
@@ -13,7 +16,7 @@ fn vec2() -> impl Strategy<Value = DVec2> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(5000))]
+    #![proptest_config(property::config(5000, file!()))]
 
     /// On random two-body node states, with the common normal or either body's: the
     /// impulses cancel to round-off (momentum is conserved), an approaching pair leaves with

@@ -1,6 +1,9 @@
 //! The trans-phase constitutive update alone, driven by prescribed L, dt and density
 //! (docs/model.md §4.1). Parameters are the paper's PS-1 discs.
 
+#[path = "common/property.rs"]
+mod property;
+
 use proptest::prelude::*;
 use regolith::body::Phase;
 use regolith::glam::{DMat2, DVec2};
@@ -64,7 +67,7 @@ fn signed_rate() -> impl Strategy<Value = f64> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(4000))]
+    #![proptest_config(property::config(4000, file!()))]
 
     /// The return lands between mu_s p* and min(mu_2 p*, tau*), tau/p* equals mu(I(gdp)) to
     /// round-off, gdp >= 0, the pressure is unchanged by the correction, and each phase is

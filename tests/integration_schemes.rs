@@ -1,6 +1,9 @@
 //! Shape-function schemes: partition of unity, zero-sum gradients, linear completeness, and
 //! the documented clipping at the domain edge (CPDI) and folding at it (B-spline).
 
+#[path = "common/property.rs"]
+mod property;
+
 use proptest::prelude::*;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
@@ -77,7 +80,7 @@ fn check_completeness<S: Scheme>(g: &GridGeometry, x: DVec2, a: f64) -> Result<(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(5000))]
+    #![proptest_config(property::config(5000, file!()))]
 
     /// Away from the edges every scheme is a partition of unity with zero-sum gradients and
     /// reproduce linear fields: sum S x_i = x_p and sum x_i (outer) grad S = 1.
@@ -196,7 +199,7 @@ fn cpdi_gradient_is_continuous_across_a_node() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(3000))]
+    #![proptest_config(property::config(3000, file!()))]
 
     /// Every footprint entry, zero or not, names a node on the grid in the rows from one below
     /// the point's cell to two above (what the lock-free band scatter relies on). Entries

@@ -74,6 +74,12 @@ impl Item for FlowField {
 }
 
 impl Output for FlowField {
+    /// The bed and the intruder it names are bodies of the scene.
+    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+        scene.body(&self.body)?;
+        scene.body(&self.intruder).map(|_| ())
+    }
+
     fn install(&self, sim: &mut Install) {
         sim.insert_resource(FlowFields {
             spec: self.clone(),

@@ -55,6 +55,11 @@ impl Item for FreeSurface {
 }
 
 impl Output for FreeSurface {
+    /// The body it names is a body of the scene.
+    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+        scene.body(&self.body).map(|_| ())
+    }
+
     fn install(&self, sim: &mut Install) {
         sim.insert_resource(SurfaceRecord {
             spec: self.clone(),

@@ -253,23 +253,13 @@ impl Output for Impact {
     }
 
     fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
-        match scene.bodies.iter().find(|b| b.name == self.body) {
-            None => Err(format!(
-                "body \"{}\" is not in the scene (its bodies: {})",
-                self.body,
-                scene
-                    .bodies
-                    .iter()
-                    .map(|b| format!("\"{}\"", b.name))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )),
-            Some(b) if !b.tracked => Err(format!(
+        if !scene.body(&self.body)?.tracked {
+            return Err(format!(
                 "body \"{}\" must be tracked (tracked: true) so that its trajectory is recorded",
                 self.body
-            )),
-            Some(_) => Ok(()),
+            ));
         }
+        Ok(())
     }
 
     fn install(&self, sim: &mut Install) {

@@ -27,7 +27,7 @@ fn line_of(text: &str, needle: &str, n: usize) -> Option<usize> {
 }
 
 /// An error pointing at the line where `needle` first appears (the file alone otherwise).
-fn near(text: &str, origin: &str, needle: &str, message: String) -> SceneError {
+pub(super) fn near(text: &str, origin: &str, needle: &str, message: String) -> SceneError {
     near_nth(text, origin, needle, 0, message)
 }
 

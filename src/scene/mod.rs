@@ -219,6 +219,22 @@ pub fn ron_options() -> ron::Options {
 }
 
 impl Scene {
+    /// The body called `name`, or a message naming the scene's bodies: what an item that
+    /// names a body (an output, a condition) checks in its `check_scene`.
+    pub fn body(&self, name: &str) -> Result<&BodySpec, String> {
+        self.bodies.iter().find(|b| b.name == name).ok_or_else(|| {
+            let names: Vec<String> = self
+                .bodies
+                .iter()
+                .map(|b| format!("\"{}\"", b.name))
+                .collect();
+            format!(
+                "body \"{name}\" is not in the scene (its bodies: {})",
+                names.join(", ")
+            )
+        })
+    }
+
     /// Parses RON text; `origin` names the file in messages.
     pub fn parse(
         text: &str,
@@ -269,7 +285,13 @@ impl Scene {
             return Ok((scene, text));
         };
         // The preset's overrides go first so that explicit ones still win.
-        let mut all = preset.overrides(&scene);
+        let grid_given = sets.iter().any(|s| {
+            let key = s.split_once('=').map_or("", |(key, _)| key.trim());
+            key == "domain" || key == "domain.cells"
+        });
+        let mut all = preset
+            .overrides(&scene, grid_given)
+            .map_err(|e| check::near(&text, &origin, "preset:", e))?;
         all.extend(sets.iter().cloned());
         apply(&all)
     }

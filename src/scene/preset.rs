@@ -41,26 +41,38 @@ impl Preset {
         }
     }
 
-    /// The `--set` overrides that apply the preset to `scene`.
-    pub fn overrides(self, scene: &Scene) -> Vec<String> {
+    /// The `--set` overrides that apply the preset to `scene`, or why it cannot: `Fast`
+    /// halves the cells per axis, which keeps them square only when both counts are even.
+    /// With `grid_given` (the command line sets the grid, which wins anyway) the preset
+    /// leaves the cells alone.
+    pub fn overrides(self, scene: &Scene, grid_given: bool) -> Result<Vec<String>, String> {
         let (nx, ny) = scene.domain.cells;
+        if self == Preset::Fast && !grid_given && !(nx.is_multiple_of(2) && ny.is_multiple_of(2)) {
+            return Err(format!(
+                "preset Fast halves the cells per axis, which keeps them square only for even \
+                 counts, and this scene has {nx} x {ny} cells: give even domain.cells, or use \
+                 preset Accurate"
+            ));
+        }
         let ((nx, ny), points, cfl) = match self {
-            Preset::Fast => ((nx.div_ceil(2), ny.div_ceil(2)), 2, 0.5),
+            Preset::Fast => ((nx / 2, ny / 2), 2, 0.5),
             Preset::Accurate => ((nx, ny), 2, 0.5),
             Preset::Fine => ((nx, ny), 3, 0.2),
             Preset::Paper => ((nx, ny), 2, 0.09),
         };
         let mut sets = vec![
-            format!("domain.cells=({nx}, {ny})"),
             "integration=CpdiFixed".to_string(),
             format!("time.step=Cfl({cfl})"),
         ];
+        if !grid_given {
+            sets.insert(0, format!("domain.cells=({nx}, {ny})"));
+        }
         sets.extend(
             scene
                 .bodies
                 .iter()
                 .map(|b| format!("bodies.{}.points_per_cell={points}", b.name)),
         );
-        sets
+        Ok(sets)
     }
 }

@@ -1,6 +1,9 @@
 //! Point-wise properties of the Bingham update on random states: what the return must
 //! satisfy at every point, whatever the stress, the velocity gradient and the step.
 
+#[path = "../../../tests/common/property.rs"]
+mod property;
+
 use bingham_material::Bingham;
 use proptest::prelude::*;
 use regolith::body::Phase;
@@ -39,6 +42,8 @@ fn gradient() -> impl Strategy<Value = DMat2> {
 }
 
 proptest! {
+    #![proptest_config(property::config(256, file!()))]
+
     #[test]
     fn the_return_obeys_the_flow_rule(
         start in stress(),

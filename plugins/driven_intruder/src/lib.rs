@@ -52,9 +52,7 @@ impl Item for Driven {
 
 impl Condition for Driven {
     fn check_scene(&self, scene: &Scene) -> Result<(), String> {
-        let Some(body) = scene.bodies.iter().find(|b| b.name == self.body) else {
-            return Err(format!("no body named \"{}\" in the scene", self.body));
-        };
+        let body = scene.body(&self.body)?;
         if body.velocity != self.velocity {
             return Err(format!(
                 "body \"{}\" starts at {} but is driven at {}: give it the driven velocity",

@@ -90,7 +90,7 @@ fn the_grains_resist_more_the_deeper_the_tip() {
 fn a_driven_body_must_exist_and_start_at_its_velocity() {
     let err = scene(&["conditions=[Driven(body: \"ball\", velocity: (0.0, -0.5))]"]).unwrap_err();
     assert!(
-        err.message.contains("no body named \"ball\""),
+        err.message.contains("body \"ball\" is not in the scene"),
         "{}",
         err.message
     );
