@@ -211,7 +211,7 @@ pub(crate) fn parse_slurm_time(t: &str) -> Result<String, String> {
 /// How the command line changes a scene (run and check).
 #[derive(Args)]
 pub(crate) struct SceneArgs {
-    /// Override a scene value, e.g. --set time.end=0.1 --set bodies.ball.velocity=(0,-3).
+    /// Override a scene value, e.g. --set time.end=0.1 --set 'bodies.intruder.velocity=(0,-3)'.
     #[arg(long = "set", value_name = "KEY.PATH=VALUE")]
     pub(crate) sets: Vec<String>,
     /// Numerical preset: fast, accurate, fine or paper (docs/ACCURACY.md); --set wins over it.
