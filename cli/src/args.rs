@@ -128,6 +128,7 @@ pub(crate) enum Command {
     Resume {
         /// The run's output directory.
         dir: PathBuf,
+        /// No progress bar.
         #[arg(long, short)]
         quiet: bool,
         /// Keep writing checkpoint.bin every N steps.

@@ -141,7 +141,7 @@ pub(crate) fn plan_batch(
     };
     let plan = write_plan(path, batch, dir, Layout::Plan, registries, &options)?;
     println!(
-        "{}: {} runs planned in {}\n  run them: cd {} && parallel -j N < jobs.txt   (or: sbatch slurm.sbatch)\n  then: regolith {} --collect {}",
+        "{}: {} runs planned in {}\n  run them: cd {} && RAYON_NUM_THREADS=1 parallel -j N < jobs.txt   (or: sbatch slurm.sbatch)\n  then: regolith {} --collect {}",
         batch.name(),
         plan.runs.len(),
         dir.display(),

@@ -191,6 +191,20 @@ fn user_errors_are_one_line_without_panic() {
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
         assert!(!err.contains("panicked"));
     }
+    // A call the command-line parser refuses exits with 2 (README, "Errors").
+    for args in [
+        &[][..],
+        &["run", scene, "--preset", "quick"],
+        &["run", scene, "--no-such-flag"],
+    ] {
+        let o = regolith(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("Usage") || err.contains("--help"),
+            "{args:?}: {err}"
+        );
+    }
 }
 
 /// The command line: a run with checkpoints, resumed from its last one, ends with the same

@@ -17,7 +17,7 @@ use serde::Deserialize;
 
 use crate::body::{Body, BodyState, Points};
 use crate::carry::{Carried, carried, restored};
-use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
+use crate::output::{Instants, Num, Output, OutputFaults, RunDir, check_instants, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
@@ -141,8 +141,14 @@ fn record_flow_field(
         for ((&k, d), u) in live.iter().zip(&field.offset).zip(&field.velocity) {
             let x = points.position[k];
             csv.push_str(&format!(
-                "{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
-                clock.time, x.x, x.y, d.x, d.y, u.x, u.y
+                "{},{},{},{},{},{},{}\n",
+                Num(clock.time),
+                Num(x.x),
+                Num(x.y),
+                Num(d.x),
+                Num(d.y),
+                Num(u.x),
+                Num(u.y)
             ));
         }
         let path = dir.join(format!("flow_field_{index}.csv"));

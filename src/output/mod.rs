@@ -206,6 +206,24 @@ impl OutputFaults {
     }
 }
 
+/// A number as the CSV files write it: the shortest text that reads back to the same `f64`,
+/// in plain decimals from 1e-4 up to 1e16 (`0.455`, `-3.55`, `0`) and in exponent form
+/// beyond (`-3.42e-17`), as Python's `repr` does. Before, every number had an exponent
+/// (`4.55e-1`, `0e0`), which is exact but hard to read in a spreadsheet.
+#[derive(Clone, Copy, Debug)]
+pub struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || (1e-4..1e16).contains(&a) || !a.is_finite() {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
+
 /// A time-series table as CSV: a `t` column, then one column per label; a NaN value is
 /// left empty.
 pub fn series_csv(labels: &[String], times: &[f64], rows: &[Vec<f64>]) -> String {
@@ -216,12 +234,12 @@ pub fn series_csv(labels: &[String], times: &[f64], rows: &[Vec<f64>]) -> String
     }
     s.push('\n');
     for (t, row) in times.iter().zip(rows) {
-        s.push_str(&format!("{t:e}"));
+        s.push_str(&Num(*t).to_string());
         for v in row {
             if v.is_nan() {
                 s.push(',');
             } else {
-                s.push_str(&format!(",{v:e}"));
+                s.push_str(&format!(",{}", Num(*v)));
             }
         }
         s.push('\n');
@@ -249,4 +267,36 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         f.sync_all()?;
     }
     std::fs::rename(&tmp, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Num;
+
+    #[test]
+    fn csv_numbers_are_plain_where_readable_and_read_back_exactly() {
+        let cases = [
+            (0.0, "0"),
+            (0.455, "0.455"),
+            (-3.55, "-3.55"),
+            (4.550000000000001e-1, "0.4550000000000001"),
+            (1e-4, "0.0001"),
+            (9.9e-5, "9.9e-5"),
+            (-3.42184996939323e-17, "-3.42184996939323e-17"),
+            (1e16, "1e16"),
+            (123456.0, "123456"),
+        ];
+        for (v, text) in cases {
+            assert_eq!(Num(v).to_string(), text);
+        }
+        // Every float reads back bit for bit, across the whole range.
+        let mut x = 1.234_567_890_123_456_7e-300_f64;
+        while x < 1e300 {
+            for v in [x, -x, x * (1.0 + f64::EPSILON)] {
+                let back: f64 = Num(v).to_string().parse().unwrap();
+                assert_eq!(back.to_bits(), v.to_bits(), "{v:e}");
+            }
+            x *= 3.7;
+        }
+    }
 }

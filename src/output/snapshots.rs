@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
-use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
+use super::{Num, Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::plugin::Install;
@@ -84,19 +84,19 @@ fn write_snapshot(
             let (x, v, s) = (p.position[k], p.velocity[k], p.stress[k]);
             let _ = writeln!(
                 csv,
-                "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
-                clock.time,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                Num(clock.time),
                 body.name,
-                x.x,
-                x.y,
-                v.x,
-                v.y,
-                p.mass[k],
-                p.volume[k],
-                s.pressure(),
-                s.equivalent_shear(),
-                st.plastic_strain_rate[k],
-                st.plastic_strain[k],
+                Num(x.x),
+                Num(x.y),
+                Num(v.x),
+                Num(v.y),
+                Num(p.mass[k]),
+                Num(p.volume[k]),
+                Num(s.pressure()),
+                Num(s.equivalent_shear()),
+                Num(st.plastic_strain_rate[k]),
+                Num(st.plastic_strain[k]),
                 st.phase[k].code()
             );
         }

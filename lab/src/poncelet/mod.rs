@@ -11,6 +11,7 @@
 //! `z''` there.
 
 use regolith::linefit::line_fit;
+use regolith::output::Num;
 
 mod runs;
 mod spline;
@@ -355,8 +356,15 @@ pub fn to_csv(points: &[PonceletPoint]) -> String {
     let mut s = String::from("depth,f,h,runs,residual,f_error,h_error,condition\n");
     for p in points {
         s.push_str(&format!(
-            "{:e},{:e},{:e},{},{:e},{:e},{:e},{:e}\n",
-            p.depth, p.f, p.h, p.runs, p.residual, p.f_error, p.h_error, p.condition
+            "{},{},{},{},{},{},{},{}\n",
+            Num(p.depth),
+            Num(p.f),
+            Num(p.h),
+            p.runs,
+            Num(p.residual),
+            Num(p.f_error),
+            Num(p.h_error),
+            Num(p.condition)
         ));
     }
     s
