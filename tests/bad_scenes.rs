@@ -48,6 +48,20 @@ fn bad_scenes_give_their_messages() {
             Some(2),
         ),
         (4, "", "missing field named `time`", None),
+        // Fields are named by the scene's keys, not by the engine's types (`TimeSettings`,
+        // `BodySpec` before).
+        (
+            4,
+            "    time: (step: Fixed(1e-4), output_every: 1e-3),",
+            "missing field named `end` in `time`",
+            Some(4),
+        ),
+        (
+            11,
+            "",
+            "missing field named `material` in a body of `bodies`",
+            Some(12),
+        ),
         (
             3,
             "    domain: (size: (1.0, 1.0), cells: (10.5, 10)),",

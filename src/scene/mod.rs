@@ -218,6 +218,22 @@ pub fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 
+/// RON's messages name the Rust type a field belongs to ("missing field named `end` in
+/// `TimeSettings`"); the user wrote the scene's keys, so those are named instead.
+fn scene_names(message: &str) -> String {
+    const NAMES: [(&str, &str); 6] = [
+        ("`BodySpec`", "a body of `bodies`"),
+        ("`TimeSettings`", "`time`"),
+        ("`Domain`", "`domain`"),
+        ("`Limits`", "`limits`"),
+        ("`Walls`", "`walls`"),
+        ("`Scene`", "the scene"),
+    ];
+    NAMES
+        .iter()
+        .fold(message.to_string(), |m, (rust, user)| m.replace(rust, user))
+}
+
 impl Scene {
     /// The body called `name`, or a message naming the scene's bodies: what an item that
     /// names a body (an output, a condition) checks in its `check_scene`.
@@ -247,7 +263,7 @@ impl Scene {
                     origin,
                     e.span.start.line,
                     e.span.start.col,
-                    e.code.to_string(),
+                    scene_names(&e.code.to_string()),
                 )
             })?;
         scene.registries = registries.clone();
