@@ -215,13 +215,14 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
     };
     // An untracked disc is a fault only where an `Impact` follows it: that fault plants one.
     let tracked = if faulty(TRACKED) { "false" } else { "true" };
-    const OUTPUTS: [&str; 6] = [
+    const OUTPUTS: [&str; 7] = [
         "Impact(body: \"disc\", surface: 0.1)",
         "Snapshots(every: 1e-5)",
         "FreeSurface(body: \"bed\", every: 1e-5)",
         "PressureFront(body: \"bed\", centre: (0.1, 0.1), radius: 0.1, bins: 4, every: 1e-5)",
         "Snapshots(at: [0.0, 2e-5])",
         "FlowField(body: \"bed\", intruder: \"disc\", scale: 0.04, at: [1e-5])",
+        "Runout(body: \"bed\", every: 1e-5)",
     ];
     // Zero to three distinct outputs (an output listed twice is refused), from a drawn one
     // on (the two `Snapshots` are three apart, never in one draw); the output fault lists one twice or names a body the scene does not have.
@@ -237,6 +238,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
             &[
                 "Impact(body: \"nobody\", surface: 0.1)",
                 "FreeSurface(body: \"nobody\", every: 1e-5)",
+                "Runout(body: \"nobody\", every: 1e-5)",
                 "",
             ],
             k[15],

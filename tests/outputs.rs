@@ -17,7 +17,8 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
              FlowField(body: \"bed\", intruder: \"disc\", scale: 0.127, at: [0.005]), \
              FreeSurface(body: \"bed\", every: 0.005), Snapshots(every: 0.005), \
              Vtk(every: 0.005, grid: true), \
-             PressureFront(body: \"bed\", centre: (0.455, 0.6825), radius: 0.2, bins: 4, every: 0.002)]",
+             PressureFront(body: \"bed\", centre: (0.455, 0.6825), radius: 0.2, bins: 4, every: 0.002), \
+             Runout(body: \"bed\", every: 0.005)]",
         ],
     );
     let mut sim = Simulation::with_output(&scene, dir.path()).unwrap();
@@ -26,6 +27,7 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
         "flow_field_0.csv",
         "free_surface.csv",
         "pressure_front.csv",
+        "runout.csv",
         "snapshots/snapshot_00000.csv",
         "vtk/points.pvd",
         "vtk/grid.pvd",
@@ -166,4 +168,38 @@ fn a_compacted_layer_is_reported_in_the_summary_and_the_last_line() {
             .unwrap()
             > 1.05
     );
+}
+
+/// `Runout` measures a column at rest at its shape exactly (the points reach half their
+/// spacing beyond their centres), then the collapse: the pile spreads and lowers, and the
+/// summary's ratios are those of the first and last records.
+#[test]
+fn the_runout_of_a_collapsing_column_starts_at_its_shape_and_spreads() {
+    use regolith::output::runout::RunoutRecord;
+    let scene = common::scene(
+        "granular_column_collapse_a2",
+        &[
+            "domain.cells=(60, 30)",
+            "time.end=0.4",
+            "outputs=[Runout(body: \"column\", every: 0.02)]",
+        ],
+    );
+    let mut sim = Simulation::new(&scene);
+    sim.run(|_| {}).unwrap();
+    let record = sim.world.resource::<RunoutRecord>();
+    let first = record.extents[0];
+    assert_eq!(record.times[0], 0.0);
+    assert!((first.left - 0.0).abs() < 1e-12, "{first:?}");
+    assert!((first.right - 0.1).abs() < 1e-12, "{first:?}");
+    assert!((first.height - 0.2).abs() < 1e-12, "{first:?}");
+    assert_eq!(record.times.len(), 21);
+    let s = record.summary().unwrap();
+    assert!((s.aspect_ratio - 2.0).abs() < 1e-9, "{s:?}");
+    // At 0.4 s the a = 2 pile has spread to several widths and lost half its height
+    // (docs/GRANULAR.md: at rest by 0.6 s, (Lf - L0)/L0 about 3.6 on 10 mm cells).
+    assert!(s.runout_ratio > 1.5, "{s:?}");
+    assert!(s.height_ratio < 0.7, "{s:?}");
+    // Never wider than every point, never narrower than the pile was.
+    let last = record.extents.last().unwrap();
+    assert!(last.left >= -1e-12 && last.right <= 0.6, "{last:?}");
 }

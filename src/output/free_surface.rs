@@ -15,7 +15,9 @@ use serde::Deserialize;
 use crate::body::{Body, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
-use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
+use crate::output::{
+    Interval, Output, OutputFaults, RunDir, check_every, points_of, series_csv, write_or_fault,
+};
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
@@ -35,9 +37,8 @@ pub struct FreeSurface {
 pub struct SurfaceRecord {
     spec: FreeSurface,
     interval: Interval,
-    /// Points per cell at t = 0 in the body's densest cell.
-    full: usize,
-    counts: Vec<usize>,
+    /// Which cells the body fills (its points per cell at t = 0 carried over checkpoints).
+    cells: DenseCells,
     pub times: Vec<f64>,
     /// One height per cell column (NaN where the column has no dense cell).
     pub heights: Vec<Vec<f64>>,
@@ -46,11 +47,7 @@ pub struct SurfaceRecord {
 impl Item for FreeSurface {
     const NAME: &'static str = "FreeSurface";
     fn validate(&self) -> Result<(), String> {
-        if self.every.is_finite() && self.every > 0.0 {
-            Ok(())
-        } else {
-            Err(format!("every must be a positive time, got {}", self.every))
-        }
+        check_every(self.every)
     }
 }
 
@@ -64,8 +61,7 @@ impl Output for FreeSurface {
         sim.insert_resource(SurfaceRecord {
             spec: self.clone(),
             interval: Interval::new(self.every),
-            full: 0,
-            counts: Vec::new(),
+            cells: DenseCells::default(),
             times: Vec::new(),
             heights: Vec::new(),
         });
@@ -75,12 +71,12 @@ impl Output for FreeSurface {
     /// The record so far: its schedule, the initial points per cell, the profiles.
     fn save(&self, world: &World) -> Carried {
         let r = world.resource::<SurfaceRecord>();
-        carried(&(&r.interval, r.full, &r.times, &r.heights))
+        carried(&(&r.interval, r.cells.full, &r.times, &r.heights))
     }
 
     fn restore(&self, world: &mut World, state: &[u8]) -> Result<(), String> {
         let mut r = world.resource_mut::<SurfaceRecord>();
-        (r.interval, r.full, r.times, r.heights) = restored(state)?;
+        (r.interval, r.cells.full, r.times, r.heights) = restored(state)?;
         Ok(())
     }
 }
@@ -96,28 +92,17 @@ fn record_surface(
     if !record.interval.due(&clock) {
         return;
     }
-    let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == record.spec.body) else {
+    let Some(points) = points_of(&bodies, &record.spec.body) else {
         return;
     };
     let [nx, ny] = grid.cells;
     let rec = &mut *record;
-    rec.counts.clear();
-    rec.counts.resize(nx * ny, 0);
-    for (x, &m) in points.position.iter().zip(&points.mass) {
-        let c = (*x - grid.origin) / grid.cell_size;
-        if m > 0.0 && c.x >= 0.0 && c.y >= 0.0 && (c.x as usize) < nx && (c.y as usize) < ny {
-            rec.counts[c.y as usize * nx + c.x as usize] += 1;
-        }
-    }
-    if rec.full == 0 {
-        rec.full = rec.counts.iter().copied().max().unwrap_or(0);
-    }
-    let threshold = rec.full.div_ceil(2).max(1);
+    rec.cells.count(points, &grid);
     let heights: Vec<f64> = (0..nx)
         .map(|i| {
             (0..ny)
                 .rev()
-                .find(|&j| rec.counts[j * nx + i] >= threshold)
+                .find(|&j| rec.cells.dense(i, j))
                 .map_or(f64::NAN, |j| {
                     grid.origin.y + (j + 1) as f64 * grid.cell_size
                 })
@@ -136,5 +121,39 @@ fn record_surface(
             &clock,
             &faults,
         );
+    }
+}
+
+/// Which cells a granular body fills densely: those holding at least half the points per
+/// cell its densest cell held at the first count (`full`), so that thrown, dilute grains do
+/// not count and a cell half-filled at rest does. `full` is what a checkpoint carries.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct DenseCells {
+    pub full: usize,
+    counts: Vec<usize>,
+    columns: usize,
+}
+
+impl DenseCells {
+    /// Counts the body's points (of positive mass) per cell, row by row.
+    pub fn count(&mut self, points: &Points, grid: &GridGeometry) {
+        let [nx, ny] = grid.cells;
+        self.columns = nx;
+        self.counts.clear();
+        self.counts.resize(nx * ny, 0);
+        for (x, &m) in points.position.iter().zip(&points.mass) {
+            let c = (*x - grid.origin) / grid.cell_size;
+            if m > 0.0 && c.x >= 0.0 && c.y >= 0.0 && (c.x as usize) < nx && (c.y as usize) < ny {
+                self.counts[c.y as usize * nx + c.x as usize] += 1;
+            }
+        }
+        if self.full == 0 {
+            self.full = self.counts.iter().copied().max().unwrap_or(0);
+        }
+    }
+
+    /// Whether cell `(i, j)` was dense at the last count.
+    pub fn dense(&self, i: usize, j: usize) -> bool {
+        self.counts[j * self.columns + i] >= self.full.div_ceil(2).max(1)
     }
 }

@@ -21,7 +21,9 @@ use crate::body::{Body, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::linefit::line_fit;
 use crate::output::summary::Section;
-use crate::output::{Interval, Output, OutputFaults, RunDir, series_csv, write_or_fault};
+use crate::output::{
+    Interval, Output, OutputFaults, RunDir, check_every, points_of, series_csv, write_or_fault,
+};
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
@@ -132,9 +134,7 @@ impl Item for PressureFront {
         if !(1..=10_000).contains(&self.bins) {
             return Err(format!("bins must be 1 to 10000, got {}", self.bins));
         }
-        if !(self.every.is_finite() && self.every > 0.0) {
-            return Err(format!("every must be a positive time, got {}", self.every));
-        }
+        check_every(self.every)?;
         if !(self.sector > 0.0 && self.sector <= 360.0) {
             return Err(format!(
                 "sector must be in (0, 360] degrees, got {}",
@@ -203,7 +203,7 @@ fn record_pressure(
     if !record.interval.due(&clock) {
         return;
     }
-    let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == record.spec.body) else {
+    let Some(points) = points_of(&bodies, &record.spec.body) else {
         return;
     };
     if record.initial.is_empty() {

@@ -11,6 +11,7 @@ pub mod free_surface;
 pub mod front;
 pub mod health;
 pub mod impact;
+pub mod runout;
 pub mod snapshots;
 pub mod summary;
 pub mod trajectory;
@@ -23,6 +24,7 @@ use std::sync::Mutex;
 
 use bevy_ecs::prelude::*;
 
+use crate::body::{Body, Points};
 use crate::carry::Carried;
 use crate::error::Fault;
 use crate::plugin::Install;
@@ -167,6 +169,20 @@ impl Timing {
 }
 
 /// Checks a list of output times: non-empty, finite, non-negative, increasing.
+/// An output's `every`: a positive, finite interval (s).
+pub fn check_every(every: f64) -> Result<(), String> {
+    if every.is_finite() && every > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("every must be a positive time, got {every}"))
+    }
+}
+
+/// The points of the body called `name`, among a query's bodies.
+pub fn points_of<'a>(bodies: &'a Query<(&Body, &Points)>, name: &str) -> Option<&'a Points> {
+    bodies.iter().find(|(b, _)| b.name == name).map(|(_, p)| p)
+}
+
 pub fn check_instants(at: &[f64]) -> Result<(), String> {
     if at.is_empty() || at.iter().any(|t| !t.is_finite() || *t < 0.0) {
         return Err("at must list one or more non-negative times".into());
