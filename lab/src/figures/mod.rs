@@ -3,8 +3,9 @@
 //!
 //! Runs go to `--runs` (default `out/figures`) and are reused when already complete (the
 //! sweeps skip finished runs, the single scenes are skipped when their `summary.json` says
-//! completed); figures go to `--out` (default `docs/figures`). Every figure's title names
-//! the resolution (COARSE: these are the CI-sized scenes, not the paper's) and the run cost.
+//! completed); figures go to `--out` (default `docs/figures`). Each figure's title says
+//! what it shows; its caption, beside it as `NAME.txt`, names the paper's panel, the
+//! resolution (COARSE: these are the CI-sized scenes, not the paper's) and the run cost.
 //! The figures: final depth and stopping time against impact energy per tip slope (Fig. 3),
 //! the Poncelet terms f(z) and h(z) (Fig. 4), mu(I) against the rate-independent bed
 //! (Fig. 10), the pressure space-time diagram with the p-wave line (Fig. 5), the normalised
@@ -126,9 +127,10 @@ pub fn make_figures(
         not_drawn(moving)
     );
     let mut written = draw_depth_energy(out, &impacts, &coarse)?;
-    let mut draw = |name: &str, result: Result<(), String>| -> Result<(), Error> {
+    let mut draw = |name: &str, caption: String, result: Result<(), String>| -> Result<(), Error> {
         let path = out.join(name);
         result.map_err(|e| fail(&path.display().to_string(), e))?;
+        written.push(write_caption(&path, &caption)?);
         written.push(path);
         Ok(())
     };
@@ -140,13 +142,15 @@ pub fn make_figures(
         .collect();
     draw(
         "rate_independent.png",
+        format!(
+            "mu(I) against the rate-independent bed, s = 1.5 (paper Fig. 10); COARSE 50 x 50 \
+             cells, {:.0} s of runs{}",
+            cost(&rate),
+            not_drawn(moving + rate_moving)
+        ),
         plot::curves(
             &out.join("rate_independent.png"),
-            &format!(
-                "mu(I) against rate-independent bed, s = 1.5 (paper Fig. 10); COARSE, {:.0} s{}",
-                cost(&rate),
-                not_drawn(moving + rate_moving)
-            ),
+            "mu(I) and rate-independent beds, s = 1.5",
             "impact energy over 3 mm (J)",
             "final depth (m)",
             &[
@@ -154,11 +158,13 @@ pub fn make_figures(
                     label: "mu(I)".into(),
                     points: mu_i,
                     hollow: false,
+                    band: None,
                 },
                 Series {
                     label: "rate-independent (Drucker-Prager)".into(),
                     points: rate.iter().map(|r| (r.energy, r.depth)).collect(),
                     hollow: true,
+                    band: None,
                 },
             ],
         ),
@@ -181,14 +187,20 @@ pub fn make_figures(
     let terms = fit(&poncelet_runs, &depths, Derivatives::Cells(DEFAULT_CELLS));
     let f: Vec<_> = terms.iter().map(|p| (p.depth, p.f, p.f_error)).collect();
     let h: Vec<_> = terms.iter().map(|p| (p.depth, p.h, p.h_error)).collect();
+    let fit_caption = |term: &str, side: &str| {
+        format!(
+            "Poncelet {term}(z), s = 1.5, fitted over {} speeds with derivatives over 3 cells of \
+             depth, band one standard error of the fit (paper Fig. 4 {side}); COARSE 50 x 50 \
+             cells, {shape_cost:.0} s of runs",
+            shape.len()
+        )
+    };
     draw(
         "poncelet_f.png",
+        fit_caption("f", "left"),
         plot::curves(
             &out.join("poncelet_f.png"),
-            &format!(
-                "Poncelet f(z), s = 1.5, {} speeds, 3-cell window fit (paper Fig. 4 left); COARSE, {shape_cost:.0} s",
-                shape.len()
-            ),
+            "Poncelet drag: depth term f(z)",
             "depth z (m)",
             "f over 3 mm (N)",
             &with_standard_error("f(z)", &f),
@@ -196,12 +208,10 @@ pub fn make_figures(
     )?;
     draw(
         "poncelet_h.png",
+        fit_caption("h", "right"),
         plot::curves(
             &out.join("poncelet_h.png"),
-            &format!(
-                "Poncelet h(z), s = 1.5, {} speeds, 3-cell window fit (paper Fig. 4 right); COARSE, {shape_cost:.0} s",
-                shape.len()
-            ),
+            "Poncelet drag: inertial term h(z)",
             "depth z (m)",
             "h over 3 mm (kg/m)",
             &with_standard_error("h(z)", &h),
@@ -213,12 +223,14 @@ pub fn make_figures(
     let wave = (e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) / rho_c).sqrt();
     draw(
         "pressure_space_time.png",
+        format!(
+            "Mean pressure rise in 1 cm rings below the impact, with the p-wave line (paper \
+             Fig. 5); COARSE 100 x 100 cells, {:.0} s",
+            wall(&front_dir)
+        ),
         plot::space_time(
             &out.join("pressure_space_time.png"),
-            &format!(
-                "Mean pressure rise in 1 cm rings below the impact (paper Fig. 5); COARSE 100 x 100, {:.0} s",
-                wall(&front_dir)
-            ),
+            "Pressure rise below the impact",
             &diagram.times,
             &diagram.radii,
             &diagram.values,
@@ -228,12 +240,14 @@ pub fn make_figures(
     let (origins, vectors) = read_flow(&flow_dir.join("flow_field_1.csv"))?;
     draw(
         "flow_field.png",
+        format!(
+            "Bed velocity over the disc's speed at 45 ms, offsets in disc diameters D (paper \
+             Fig. 6); COARSE, {:.0} s",
+            wall(&flow_dir)
+        ),
         plot::arrows(
             &out.join("flow_field.png"),
-            &format!(
-                "Bed velocity / disc speed at 45 ms, offsets in disc diameters D (Fig. 6); COARSE, {:.0} s",
-                wall(&flow_dir)
-            ),
+            "Flow around the disc at 45 ms",
             ("x offset / D", "y offset / D"),
             &origins,
             &vectors,
@@ -254,12 +268,14 @@ pub fn make_figures(
     }
     draw(
         "splash.png",
+        format!(
+            "Splash of a 20 mm disc at 5 m/s into Seguin (2010) grains (paper Fig. 7); COARSE \
+             4 mm cells, {:.0} s",
+            wall(&splash_dir)
+        ),
         plot::clouds(
             &out.join("splash.png"),
-            &format!(
-                "Splash of a 20 mm disc at 5 m/s, Seguin (2010) grains (paper Fig. 7); COARSE 4 mm, {:.0} s",
-                wall(&splash_dir)
-            ),
+            "Splash of a 20 mm disc at 5 m/s",
             &panels,
             ((0.0, 0.2), (0.0, 0.12)),
         ),
@@ -268,7 +284,7 @@ pub fn make_figures(
 }
 
 /// Draws the paper's Fig. 3 from `impacts` into `out`: final depth and stopping time
-/// against impact energy, one curve per tip slope; `caption` ends both titles. Returns
+/// against impact energy, one curve per tip slope; `caption` ends both captions. Returns
 /// the files written.
 fn draw_depth_energy(out: &Path, impacts: &[Impact], caption: &str) -> Result<Vec<PathBuf>, Error> {
     let mut slopes: Vec<f64> = impacts.iter().map(|r| r.slope).collect();
@@ -289,36 +305,43 @@ fn draw_depth_energy(out: &Path, impacts: &[Impact], caption: &str) -> Result<Ve
                     .map(|r| (r.energy, f(r)))
                     .collect(),
                 hollow: false,
+                band: None,
             })
             .collect()
     };
-    // File, title, y axis, measure.
-    type Figure = (&'static str, &'static str, &'static str, fn(&Impact) -> f64);
+    // File, title, paper panel, y axis, measure.
+    type Figure = (
+        &'static str,
+        &'static str,
+        &'static str,
+        &'static str,
+        fn(&Impact) -> f64,
+    );
     let figures: [Figure; 2] = [
         (
             "depth_energy.png",
-            "Final depth against impact energy (paper Fig. 3 left)",
+            "Final depth against impact energy",
+            "Fig. 3 left",
             "final depth (m)",
             |r| r.depth,
         ),
         (
             "stopping_time_energy.png",
-            "Stopping time against impact energy (paper Fig. 3 right)",
+            "Stopping time against impact energy",
+            "Fig. 3 right",
             "stopping time (s)",
             |r| r.stopping,
         ),
     ];
     let mut written = Vec::new();
-    for (name, title, y, f) in figures {
+    for (name, title, panel, y, f) in figures {
         let path = out.join(name);
-        plot::curves(
+        plot::curves(&path, title, "impact energy over 3 mm (J)", y, &by_slope(f))
+            .map_err(|e| fail(&path.display().to_string(), e))?;
+        written.push(write_caption(
             &path,
-            &format!("{title}; {caption}"),
-            "impact energy over 3 mm (J)",
-            y,
-            &by_slope(f),
-        )
-        .map_err(|e| fail(&path.display().to_string(), e))?;
+            &format!("{title} (paper {panel}); {caption}"),
+        )?);
         written.push(path);
     }
     Ok(written)
@@ -349,7 +372,17 @@ pub fn depth_energy_from(dir: &Path, out: &Path) -> Result<Vec<PathBuf>, Error> 
     draw_depth_energy(out, &impacts, &caption)
 }
 
-/// The title's note of runs left out: intruder still moving at the end, or run not completed.
+/// Writes a figure's caption beside it (`name.png` -> `name.txt`): what it shows, the
+/// paper's panel, the resolution and the cost of its runs, kept out of the picture so the
+/// figure can go into a paper as it is. Returns the caption's path.
+fn write_caption(figure: &Path, caption: &str) -> Result<PathBuf, Error> {
+    let path = figure.with_extension("txt");
+    regolith::output::write_atomic(&path, format!("{caption}\n").as_bytes())
+        .map_err(|e| fail(&path.display().to_string(), e))?;
+    Ok(path)
+}
+
+/// The caption's note of runs left out: intruder still moving at the end, or run not completed.
 fn not_drawn(left_out: usize) -> String {
     match left_out {
         0 => String::new(),

@@ -98,32 +98,19 @@ pub(super) struct SpaceTime {
     pub(super) values: Vec<Vec<f64>>,
 }
 
-/// A fitted term per depth (`(depth, value, standard error)`, per metre of thickness) as
-/// three curves over the scene's thickness: the value and one standard error either side.
-pub(super) fn with_standard_error(label: &str, terms: &[(f64, f64, f64)]) -> [Series; 3] {
-    let curve = |sign: f64| -> Vec<(f64, f64)> {
-        terms
-            .iter()
-            .map(|&(z, v, e)| (z, (v + sign * e) * THICKNESS))
-            .collect()
-    };
-    [
-        Series {
-            label: label.into(),
-            points: curve(0.0),
-            hollow: false,
-        },
-        Series {
-            label: "+1 standard error (fit residual)".into(),
-            points: curve(1.0),
-            hollow: true,
-        },
-        Series {
-            label: "-1 standard error".into(),
-            points: curve(-1.0),
-            hollow: true,
-        },
-    ]
+/// A fitted term per depth (`(depth, value, standard error)`, per metre of thickness) as a
+/// curve over the scene's thickness, with one standard error either side as its band.
+pub(super) fn with_standard_error(label: &str, terms: &[(f64, f64, f64)]) -> [Series; 1] {
+    let band = terms
+        .iter()
+        .map(|&(z, v, e)| (z, (v - e) * THICKNESS, (v + e) * THICKNESS))
+        .collect();
+    [Series {
+        label: label.into(),
+        points: terms.iter().map(|&(z, v, _)| (z, v * THICKNESS)).collect(),
+        hollow: false,
+        band: Some(("±1 standard error (fit residual)".into(), band)),
+    }]
 }
 
 /// `pressure_front.csv`: times, bin radii (from the `rR` headers) and the rows.

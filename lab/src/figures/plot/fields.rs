@@ -47,7 +47,7 @@ pub fn space_time(
     let ms = 1e3;
     let x_axis = format!("time (ms); black line: p-wave speed sqrt(M/rho_c) = {speed:.0} m/s");
     let axes = (x_axis.as_str(), "distance from the impact point (m)");
-    let mut chart = chart(&main, title, 17, ((0.0, t1 * ms), (0.0, r1)), axes)?;
+    let mut chart = chart(&main, title, 22, ((0.0, t1 * ms), (0.0, r1)), axes)?;
     let top = values
         .iter()
         .flatten()
@@ -85,7 +85,7 @@ where
     DB::ErrorType: 'static,
 {
     let mut bar = ChartBuilder::on(area)
-        .caption(label, ("sans-serif", 13))
+        .caption(label, ("sans-serif", 17))
         .margin_top(40)
         .margin_bottom(57)
         .margin_right(8)
@@ -97,7 +97,7 @@ where
         .disable_x_axis()
         .disable_y_mesh()
         .y_label_formatter(&|v| format!("{:.0}", v / 1e3))
-        .label_style(("sans-serif", 13))
+        .label_style(("sans-serif", 16))
         .draw()
         .map_err(fail)?;
     const STEPS: usize = 64;
@@ -134,7 +134,7 @@ pub fn arrows(
     let size = equal_aspect(window, 760);
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
-    let mut chart = chart(&root, title, 15, window, axes)?;
+    let mut chart = chart(&root, title, 22, window, axes)?;
     let colour = PALETTE[0];
     chart
         .draw_series(origins.iter().zip(vectors).map(|(&o, &v)| {
@@ -178,7 +178,7 @@ pub fn arrows(
         .draw_series(std::iter::once(Text::new(
             key.meaning.clone(),
             (tip.0 + 0.3 * head, at.1 + 0.4 * head),
-            ("sans-serif", 14),
+            ("sans-serif", 18),
         )))
         .map_err(fail)?;
     root.present().map_err(fail)
@@ -206,10 +206,10 @@ pub fn clouds(
     let (w, h) = equal_aspect(window, 600);
     let root = BitMapBackend::new(path, (w * panels.len() as u32, h + 30)).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
-    let root = root.titled(title, ("sans-serif", 20)).map_err(fail)?;
+    let root = root.titled(title, ("sans-serif", 24)).map_err(fail)?;
     let areas = root.split_evenly((1, panels.len().max(1)));
     for (area, (caption, clouds)) in areas.iter().zip(panels) {
-        let mut chart = chart(area, caption, 16, window, ("x (m)", "y (m)"))?;
+        let mut chart = chart(area, caption, 20, window, ("x (m)", "y (m)"))?;
         for (k, cloud) in clouds.iter().enumerate() {
             let colour = PALETTE[k % PALETTE.len()];
             chart

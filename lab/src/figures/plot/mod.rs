@@ -10,12 +10,17 @@ mod fields;
 
 pub use fields::{ArrowKey, arrows, clouds, space_time};
 
+/// An uncertainty band: its legend label and `(x, low, high)` at each point.
+pub type Band = (String, Vec<(f64, f64, f64)>);
+
 /// One labelled series of `(x, y)` points.
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
     /// Drawn hollow and dashed-looking (markers only) to set a variant apart.
     pub hollow: bool,
+    /// An uncertainty band drawn shaded in the series' colour behind it.
+    pub band: Option<Band>,
 }
 
 type Result<T> = std::result::Result<T, String>;
@@ -84,16 +89,21 @@ where
     let ((x0, x1), (y0, y1)) = ranges;
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", size))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(65)
+        .margin(16)
+        .x_label_area_size(60)
+        .y_label_area_size(85)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(fail)?;
+    // Readable at a column's width: 18 px tick labels, 20 px axis names, a light major grid
+    // and no minor one.
     chart
         .configure_mesh()
         .x_desc(axes.0)
         .y_desc(axes.1)
-        .label_style(("sans-serif", 14))
+        .label_style(("sans-serif", 18))
+        .axis_desc_style(("sans-serif", 20))
+        .bold_line_style(BLACK.mix(0.12))
+        .light_line_style(TRANSPARENT)
         .draw()
         .map_err(fail)?;
     Ok(chart)
@@ -140,7 +150,7 @@ where
         .position(position)
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
-        .label_font(("sans-serif", 14))
+        .label_font(("sans-serif", 18))
         .draw()
         .map_err(fail)
 }
@@ -153,15 +163,44 @@ pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> 
         series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
         true,
     );
+    let band_ends = series
+        .iter()
+        .filter_map(|s| s.band.as_ref())
+        .flat_map(|(_, b)| b.iter().flat_map(|&(_, lo, hi)| [lo, hi]));
     let ys = bounds(
-        series.iter().flat_map(|s| s.points.iter().map(|p| p.1)),
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .chain(band_ends),
         true,
     );
-    let mut chart = chart(&root, title, 18, (xs, ys), (x, y))?;
+    let mut chart = chart(&root, title, 24, (xs, ys), (x, y))?;
     let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.points.clone()).collect();
     let corner = emptiest_corner(&all, (xs, ys));
     for (k, s) in series.iter().enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
+        if let Some((label, band)) = &s.band {
+            let mut band: Vec<_> = band
+                .iter()
+                .copied()
+                .filter(|b| b.0.is_finite() && b.1.is_finite() && b.2.is_finite())
+                .collect();
+            band.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // The low edge forward, the high edge back: one shaded polygon.
+            let outline: Vec<(f64, f64)> = band
+                .iter()
+                .map(|&(x, lo, _)| (x, lo))
+                .chain(band.iter().rev().map(|&(x, _, hi)| (x, hi)))
+                .collect();
+            let shade = colour.mix(0.22);
+            chart
+                .draw_series(std::iter::once(Polygon::new(outline, shade.filled())))
+                .map_err(fail)?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 20, y + 6)], shade.filled())
+                });
+        }
         let mut pts = s.points.clone();
         pts.retain(|p| p.0.is_finite() && p.1.is_finite());
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -212,7 +251,7 @@ pub fn pareto(path: &Path, title: &str, points: &[Labelled]) -> Result<()> {
         "log10 wall time (s, one thread)",
         "log10 relative error (larger of final depth and stopping time)",
     );
-    let mut chart = chart(&root, title, 16, ranges, axes)?;
+    let mut chart = chart(&root, title, 22, ranges, axes)?;
     let mut front: Vec<(f64, f64)> = points
         .iter()
         .zip(&xy)
@@ -234,7 +273,7 @@ pub fn pareto(path: &Path, title: &str, points: &[Labelled]) -> Result<()> {
             .draw_series(std::iter::once(Text::new(
                 p.0.clone(),
                 (q.0 + 0.02, q.1),
-                ("sans-serif", 13),
+                ("sans-serif", 16),
             )))
             .map_err(fail)?;
     }
@@ -278,6 +317,7 @@ mod tests {
             label: "a".into(),
             points: vec![(0.0, 1.0), (1.0, 2.0), (2.0, f64::NAN)],
             hollow: true,
+            band: Some(("band".into(), vec![(0.0, 0.5, 1.5), (1.0, 1.5, 2.5)])),
         }];
         let p = dir.path().join("curves.png");
         curves(&p, "t", "x", "y", &series).unwrap();
