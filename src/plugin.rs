@@ -28,6 +28,7 @@ use crate::output::flow_field::FlowField;
 use crate::output::free_surface::FreeSurface;
 use crate::output::front::PressureFront;
 use crate::output::impact::Impact;
+use crate::output::profile::VelocityProfile;
 use crate::output::runout::Runout;
 use crate::output::snapshots::Snapshots;
 use crate::output::vtk::Vtk;
@@ -62,6 +63,7 @@ impl Plugin for DefaultPlugins {
             .register::<dyn Output, FlowField>()
             .register::<dyn Output, FreeSurface>()
             .register::<dyn Output, Runout>()
+            .register::<dyn Output, VelocityProfile>()
             .register::<dyn ShapeFunctions, Linear>()
             .register::<dyn ShapeFunctions, CpdiFixed>()
             .register::<dyn ShapeFunctions, QuadraticBspline>()

@@ -215,7 +215,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
     };
     // An untracked disc is a fault only where an `Impact` follows it: that fault plants one.
     let tracked = if faulty(TRACKED) { "false" } else { "true" };
-    const OUTPUTS: [&str; 7] = [
+    const OUTPUTS: [&str; 8] = [
         "Impact(body: \"disc\", surface: 0.1)",
         "Snapshots(every: 1e-5)",
         "FreeSurface(body: \"bed\", every: 1e-5)",
@@ -223,6 +223,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
         "Snapshots(at: [0.0, 2e-5])",
         "FlowField(body: \"bed\", intruder: \"disc\", scale: 0.04, at: [1e-5])",
         "Runout(body: \"bed\", every: 1e-5)",
+        "VelocityProfile(body: \"bed\", every: 1e-5)",
     ];
     // Zero to three distinct outputs (an output listed twice is refused), from a drawn one
     // on (the two `Snapshots` are three apart, never in one draw); the output fault lists one twice or names a body the scene does not have.

@@ -18,7 +18,7 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
              FreeSurface(body: \"bed\", every: 0.005), Snapshots(every: 0.005), \
              Vtk(every: 0.005, grid: true), \
              PressureFront(body: \"bed\", centre: (0.455, 0.6825), radius: 0.2, bins: 4, every: 0.002), \
-             Runout(body: \"bed\", every: 0.005)]",
+             Runout(body: \"bed\", every: 0.005), VelocityProfile(body: \"bed\", every: 0.005)]",
         ],
     );
     let mut sim = Simulation::with_output(&scene, dir.path()).unwrap();
@@ -28,6 +28,7 @@ fn all_built_in_outputs_run_together_and_write_their_files() {
         "free_surface.csv",
         "pressure_front.csv",
         "runout.csv",
+        "velocity_profile.csv",
         "snapshots/snapshot_00000.csv",
         "vtk/points.pvd",
         "vtk/grid.pvd",
@@ -202,4 +203,40 @@ fn the_runout_of_a_collapsing_column_starts_at_its_shape_and_spreads() {
     // Never wider than every point, never narrower than the pile was.
     let last = record.extents.last().unwrap();
     assert!(last.left >= -1e-12 && last.right <= 0.6, "{last:?}");
+}
+
+/// `VelocityProfile` reads a layer's velocity row by row: a layer given `vx = 20 y` (shear
+/// at 20/s) measures `20 y` at each row's centre (2 x 2 points per cell sit symmetrically
+/// about it), its mass-weighted mean `20 ybar`, and its surface is its top row.
+#[test]
+fn the_velocity_profile_reads_a_sheared_layer_row_by_row() {
+    use regolith::body::Points;
+    use regolith::output::profile::Profile;
+    let scene = common::scene("chute_flow", &[]);
+    let mut sim = Simulation::new(&scene);
+    let grid = sim.grid().clone();
+    let mut q = sim.world.query::<&mut Points>();
+    let mut points = q.iter_mut(&mut sim.world).next().unwrap();
+    for k in 0..points.len() {
+        points.velocity[k].x = 20.0 * points.position[k].y;
+    }
+    let p = Profile::measure(&points, &grid);
+    let h = grid.cell_size;
+    // The layer is 0.1 m deep on 5 mm cells: rows 0 to 19 hold points, 20 to 29 none.
+    for j in 0..20 {
+        let centre = (j as f64 + 0.5) * h;
+        assert!(
+            (p.speeds[j] - 20.0 * centre).abs() < 1e-12,
+            "row {j}: {}",
+            p.speeds[j]
+        );
+    }
+    assert!(p.speeds[20..].iter().all(|v| v.is_nan()));
+    assert_eq!(p.surface(), Some(19));
+    let mass: f64 = points.mass.iter().sum();
+    let ybar = (0..points.len())
+        .map(|k| points.mass[k] * points.position[k].y)
+        .sum::<f64>()
+        / mass;
+    assert!((p.mean_speed - 20.0 * ybar).abs() < 1e-12);
 }

@@ -74,10 +74,8 @@ impl Item for FlowField {
 }
 
 impl Output for FlowField {
-    /// The bed and the intruder it names are bodies of the scene.
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
-        scene.body(&self.body)?;
-        scene.body(&self.intruder).map(|_| ())
+    fn bodies(&self) -> Vec<&str> {
+        vec![&self.body, &self.intruder]
     }
 
     fn install(&self, sim: &mut Install) {

@@ -52,9 +52,8 @@ impl Item for FreeSurface {
 }
 
 impl Output for FreeSurface {
-    /// The body it names is a body of the scene.
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
-        scene.body(&self.body).map(|_| ())
+    fn bodies(&self) -> Vec<&str> {
+        vec![&self.body]
     }
 
     fn install(&self, sim: &mut Install) {

@@ -146,9 +146,8 @@ impl Item for PressureFront {
 }
 
 impl Output for PressureFront {
-    /// The body it names is a body of the scene.
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
-        scene.body(&self.body).map(|_| ())
+    fn bodies(&self) -> Vec<&str> {
+        vec![&self.body]
     }
 
     /// `pressure_front`: the front's speed and arrivals (`null` if fewer than two bins saw

@@ -11,6 +11,7 @@ pub mod free_surface;
 pub mod front;
 pub mod health;
 pub mod impact;
+pub mod profile;
 pub mod runout;
 pub mod snapshots;
 pub mod summary;
@@ -38,10 +39,16 @@ pub struct RunDir(pub Option<PathBuf>);
 /// An extra output: an [`Item`](crate::registry::Item) (its scene name and parameter
 /// checks) that implements this, registered with `app.register::<dyn Output, YourType>()`.
 pub trait Output: DynItem {
-    /// What must hold between the output and the rest of the scene (e.g. that a body it
-    /// names exists); `check` reports a failure at the output's line. By default nothing.
-    fn check_scene(&self, _scene: &crate::scene::Scene) -> Result<(), String> {
-        Ok(())
+    /// The bodies the output names; the default `check_scene` refuses a scene without them.
+    fn bodies(&self) -> Vec<&str> {
+        Vec::new()
+    }
+    /// What must hold between the output and the rest of the scene; `check` reports a
+    /// failure at the output's line. By default, that the bodies it names exist.
+    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+        self.bodies()
+            .into_iter()
+            .try_for_each(|b| scene.body(b).map(|_| ()))
     }
     /// Adds the output's resources and its systems (in [`crate::step::StepSet::Output`]).
     fn install(&self, sim: &mut Install);
