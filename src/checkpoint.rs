@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::carry::{Carried, Partial};
 use crate::diagnostics::EnergyLimit;
+use crate::output::Seconds;
 use crate::output::write_atomic;
 use crate::resources::{Clock, OutputClock, StepRule};
 use crate::scene::Scene;
@@ -202,8 +203,10 @@ impl Checkpoint {
             };
             if listed != Some(item.name.as_str()) {
                 partial.push(format!(
-                    "the {} {} of the interrupted run was not asked for again: its record ends at t = {time} s",
-                    item.name, item.kind
+                    "the {} {} of the interrupted run was not asked for again: its record ends at t = {} s",
+                    item.name,
+                    item.kind,
+                    Seconds(time)
                 ));
             }
         }
@@ -229,13 +232,14 @@ fn carry_over(
         .find(|i| i.kind == kind && i.index == index && i.name == name);
     match saved.map(|i| &i.carried) {
         None => partial.push(format!(
-            "the {name} {kind} was added when the run resumed at t = {time} s: it holds only what came after"
+            "the {name} {kind} was added when the run resumed at t = {} s: it holds only what came after",
+            Seconds(time)
         )),
         Some(Carried::Nothing) => {}
         Some(Carried::State(state)) => {
             restore(state).map_err(|e| format!("the checkpoint's {name} {kind}: {e}"))?
         }
-        Some(Carried::Lost(why)) => partial.push(format!("{why} (at t = {time} s)")),
+        Some(Carried::Lost(why)) => partial.push(format!("{why} (at t = {} s)", Seconds(time))),
     }
     Ok(())
 }

@@ -184,7 +184,7 @@ fn run_to_end(
             "interrupted",
             Some(format!(
                 "interrupted by a signal at t = {} s (trajectory.csv ends there); `regolith resume {}` continues the run",
-                sim.clock().time,
+                crate::output::Seconds(sim.clock().time),
                 out.display()
             )),
         ),

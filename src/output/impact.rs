@@ -312,8 +312,9 @@ fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
         let (y, vx, vy) = (series("y")?, series("vx")?, series("vy")?);
         let contact = watch.contact.ok_or_else(|| {
             format!(
-                "body \"{}\" felt no contact force before the run ended at t = {now} s",
-                watch.body
+                "body \"{}\" felt no contact force before the run ended at t = {} s",
+                watch.body,
+                super::Seconds(now)
             )
         })?;
         let mass = mass.ok_or_else(|| format!("no body \"{}\"", watch.body))?;
@@ -326,7 +327,7 @@ fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
         .ok_or_else(|| {
             format!(
                 "fewer than two trajectory rows after first contact at t = {} s",
-                contact.time
+                super::Seconds(contact.time)
             )
         })
     };

@@ -247,6 +247,19 @@ impl std::fmt::Display for Num {
     }
 }
 
+/// A simulated time as messages print it: nine significant digits, then the shortest text
+/// (`0.3` for a clock that summed its steps to 0.30000000000000004, `0.0123456789`): a
+/// message names a moment, which nine digits place to well under a step.
+#[derive(Clone, Copy, Debug)]
+pub struct Seconds(pub f64);
+
+impl std::fmt::Display for Seconds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let rounded: f64 = format!("{:.8e}", self.0).parse().unwrap_or(self.0);
+        write!(f, "{}", Num(rounded))
+    }
+}
+
 /// A time-series table as CSV: a `t` column, then one column per label; a NaN value is
 /// left empty.
 pub fn series_csv(labels: &[String], times: &[f64], rows: &[Vec<f64>]) -> String {
@@ -294,7 +307,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::Num;
+    use super::{Num, Seconds};
+
+    #[test]
+    fn message_times_have_nine_significant_digits() {
+        assert_eq!(Seconds(0.1 + 0.2).to_string(), "0.3");
+        assert_eq!(Seconds(0.012345678901234567).to_string(), "0.0123456789");
+        assert_eq!(Seconds(0.0).to_string(), "0");
+        assert_eq!(Seconds(20.0).to_string(), "20");
+    }
 
     #[test]
     fn csv_numbers_are_plain_where_readable_and_read_back_exactly() {
