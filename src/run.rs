@@ -222,9 +222,8 @@ pub fn summarize(
             state_hash: sim.state_hash(&b.name).unwrap_or_default(),
             health: b.inertial_scale.and_then(|_| {
                 let layer = scene
-                    .bodies
-                    .iter()
-                    .find(|spec| spec.name == b.name)
+                    .body(&b.name)
+                    .ok()
                     .and_then(|spec| health::layer_bounds(spec.shape.bounds(), &grid));
                 sim.health(&b.name, layer)
             }),

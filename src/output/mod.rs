@@ -175,7 +175,6 @@ impl Timing {
     }
 }
 
-/// Checks a list of output times: non-empty, finite, non-negative, increasing.
 /// An output's `every`: a positive, finite interval (s).
 pub fn check_every(every: f64) -> Result<(), String> {
     if every.is_finite() && every > 0.0 {
@@ -190,6 +189,7 @@ pub fn points_of<'a>(bodies: &'a Query<(&Body, &Points)>, name: &str) -> Option<
     bodies.iter().find(|(b, _)| b.name == name).map(|(_, p)| p)
 }
 
+/// Checks a list of output times: non-empty, finite, non-negative, increasing.
 pub fn check_instants(at: &[f64]) -> Result<(), String> {
     if at.is_empty() || at.iter().any(|t| !t.is_finite() || *t < 0.0) {
         return Err("at must list one or more non-negative times".into());

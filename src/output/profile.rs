@@ -94,6 +94,31 @@ pub struct ProfileRecord {
     pub profiles: Vec<Profile>,
 }
 
+/// The summary's `velocity_profile`: the last record's speeds and surface.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ProfileSummary {
+    /// When the last record was taken (s).
+    pub time: f64,
+    pub mean_speed: f64,
+    pub surface_speed: f64,
+    /// The centre of the surface row (m).
+    pub surface_height: f64,
+}
+
+impl ProfileRecord {
+    /// The last record's summary, on `grid` (`None` before a record with points).
+    pub fn summary(&self, grid: &GridGeometry) -> Option<ProfileSummary> {
+        let (time, p) = (*self.times.last()?, self.profiles.last()?);
+        let j = p.surface()?;
+        Some(ProfileSummary {
+            time,
+            mean_speed: p.mean_speed,
+            surface_speed: p.speeds[j],
+            surface_height: grid.origin.y + (j as f64 + 0.5) * grid.cell_size,
+        })
+    }
+}
+
 impl Item for VelocityProfile {
     const NAME: &'static str = "VelocityProfile";
     fn validate(&self) -> Result<(), String> {
@@ -120,18 +145,9 @@ impl Output for VelocityProfile {
     /// (m) at the last record.
     fn summary(&self, world: &World) -> Section {
         let grid = world.resource::<GridGeometry>();
-        let last = world
+        let entry = world
             .get_resource::<ProfileRecord>()
-            .and_then(|r| Some((*r.times.last()?, r.profiles.last()?.clone())));
-        let entry = last.as_ref().and_then(|(t, p)| {
-            let j = p.surface()?;
-            Some(serde_json::json!({
-                "time": t,
-                "mean_speed": p.mean_speed,
-                "surface_speed": p.speeds[j],
-                "surface_height": grid.origin.y + (j as f64 + 0.5) * grid.cell_size,
-            }))
-        });
+            .and_then(|r| r.summary(grid));
         let mut section = Section::entry("velocity_profile", serde_json::json!(entry));
         section.units = [
             ("time", "s"),
@@ -145,10 +161,7 @@ impl Output for VelocityProfile {
         section.headline = Some(match &entry {
             Some(e) => format!(
                 "velocity profile at t = {:.3} s: mean {:.4} m/s, surface {:.4} m/s at y = {:.4} m",
-                e["time"].as_f64().unwrap_or(f64::NAN),
-                e["mean_speed"].as_f64().unwrap_or(f64::NAN),
-                e["surface_speed"].as_f64().unwrap_or(f64::NAN),
-                e["surface_height"].as_f64().unwrap_or(f64::NAN),
+                e.time, e.mean_speed, e.surface_speed, e.surface_height
             ),
             None => format!(
                 "velocity profile: not measured (no points of body \"{}\")",

@@ -176,7 +176,7 @@ fn record(
     mut state: ResMut<Drive>,
     bodies: Query<(&Body, &Points)>,
 ) {
-    let Some((_, points)) = bodies.iter().find(|(b, _)| b.name == state.spec.body) else {
+    let Some(points) = regolith::output::points_of(&bodies, &state.spec.body) else {
         return;
     };
     let bottom = points
