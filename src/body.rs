@@ -80,13 +80,32 @@ impl Points {
     }
 }
 
+/// The inertial number below which a granular point on the yield surface is labelled at rest
+/// ([`Phase::Solid`]) rather than [`Phase::Flowing`]: the lower end of the dense-flow regime,
+/// `I ~ 1e-3` (GDR MiDi 2004, Eur. Phys. J. E 14, 341; Jop, Forterre & Pouliquen 2006,
+/// Nature 441, 727), below which a granular material creeps quasi-statically and `mu(I)`
+/// differs from `mu_s` by under `(mu_2 - mu_s) I / I_0`, 0.1% of PS-1's friction. A pile at
+/// its angle of repose sits on the yield surface, and elastic jitter there gives its points
+/// small plastic increments step after step; they are labelled at rest, not flowing
+/// (docs/GRANULAR.md, "Phases at rest"). A label only: the stress update is the same.
+pub const QUASI_STATIC_INERTIAL_NUMBER: f64 = 1e-3;
+
+/// `I = gdp d sqrt(rho_s / p)` from the material's `scale = d sqrt(rho_s)`, the plastic rate
+/// `gdp` (1/s) and the pressure `p` (Pa); 0 when `p <= 0` (no contact pressure, no `I`).
+pub fn inertial_number(scale: f64, gdp: f64, p: f64) -> f64 {
+    if p > 0.0 { gdp * scale / p.sqrt() } else { 0.0 }
+}
+
 /// The state of the material at a point, as the constitutive update classifies it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Phase {
-    /// Dense and below the yield surface (elastic).
+    /// Dense and at rest: below the yield surface (elastic), or, for a granular material, on
+    /// it at an inertial number below [`QUASI_STATIC_INERTIAL_NUMBER`] (creeping).
     #[default]
     Solid,
-    /// Dense and flowing plastically (on the yield surface).
+    /// Dense and flowing plastically: on the yield surface, for a granular material at an
+    /// inertial number of at least [`QUASI_STATIC_INERTIAL_NUMBER`]; for a material without
+    /// grains (`DruckerPrager`, `Bingham`, no grain scale) at any plastic rate.
     Flowing,
     /// Below the critical density or in tension: stress free (granular "gas").
     Disconnected,
@@ -99,6 +118,16 @@ impl Phase {
             Phase::Solid => 0,
             Phase::Flowing => 1,
             Phase::Disconnected => 2,
+        }
+    }
+
+    /// The label of a point the update classified as `self`, given its inertial number
+    /// (`None` for a material without a grain scale): a `Flowing` point below
+    /// [`QUASI_STATIC_INERTIAL_NUMBER`] is at rest (`Solid`); other labels are kept.
+    pub fn at_inertial_number(self, inertial_number: Option<f64>) -> Phase {
+        match (self, inertial_number) {
+            (Phase::Flowing, Some(i)) if i < QUASI_STATIC_INERTIAL_NUMBER => Phase::Solid,
+            (phase, _) => phase,
         }
     }
 }
@@ -147,10 +176,8 @@ impl Body {
     /// Inertial number of a point with plastic rate `gdp` at pressure `p` (0 when `p <= 0`
     /// or the material has no grain scale).
     pub fn inertial_number(&self, gdp: f64, p: f64) -> f64 {
-        match self.inertial_scale {
-            Some(s) if p > 0.0 => gdp * s / p.sqrt(),
-            _ => 0.0,
-        }
+        self.inertial_scale
+            .map_or(0.0, |s| inertial_number(s, gdp, p))
     }
 }
 

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use crate::body::{Phase, PointStates, Points};
+use crate::body::{Phase, PointStates, Points, inertial_number};
 use crate::grid_field::{GridFields, PointFields, StartBands};
 use crate::registry::{DynItem, Item};
 use crate::resources::Clock;
@@ -208,6 +208,7 @@ pub fn update_stress<M: Material>(
         let states = &mut *states;
         let state = &mut *state;
         let params = &state.params;
+        let scale = params.inertial_scale();
         points
             .stress
             .par_iter_mut()
@@ -233,7 +234,10 @@ pub fn update_stress<M: Material>(
                     let outcome = params.update(stress, history, &step);
                     *rate = outcome.plastic_strain_rate;
                     *strain += outcome.plastic_strain_rate * dt;
-                    *phase = outcome.phase;
+                    let p = stress.pressure();
+                    *phase = outcome.phase.at_inertial_number(
+                        scale.map(|s| inertial_number(s, outcome.plastic_strain_rate, p)),
+                    );
                 },
             );
     }
