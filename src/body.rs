@@ -170,6 +170,9 @@ pub struct Body {
     /// `d sqrt(rho_s)` of a granular material, so that the inertial number is
     /// `I = gdp d sqrt(rho_s / p)`; `None` for materials without grains.
     pub inertial_scale: Option<f64>,
+    /// Whether the material is granular, so that the delta-correction (the scene's
+    /// `spacing`) may move the body's points (`step::spacing`).
+    pub granular: bool,
 }
 
 impl Body {

@@ -1,5 +1,6 @@
 //! A simulation: the ECS world built from a scene, and the schedule that steps it.
 
+use crate::step::spacing::{Spacing, SpacingScratch};
 use std::collections::BTreeSet;
 
 use bevy_ecs::prelude::*;
@@ -124,6 +125,7 @@ impl Simulation {
             update: scene.update,
             dilatation: scene.dilatation,
             affine: scene.transfer.affine(),
+            spacing: scene.spacing,
         });
         if multi_body {
             scene.contact.install(&mut world, &mut schedule);
@@ -168,6 +170,7 @@ impl Simulation {
                 material: spec.material.name(),
                 wave_speed: spec.material.wave_speed(),
                 inertial_scale: spec.material.inertial_scale(),
+                granular: spec.material.granular(),
             };
             if spec.tracked {
                 tracked.push(spec.name.clone());
@@ -216,6 +219,10 @@ impl Simulation {
         });
         world.insert_resource(Gravity(scene.gravity));
         world.insert_resource(Boundaries(scene.walls));
+        if let Spacing::DeltaCorrection(constants) = scene.spacing {
+            world.insert_resource(constants);
+            world.insert_resource(SpacingScratch::default());
+        }
         world.insert_resource(VelocityRule {
             transfer: scene.transfer.0.clone(),
             flip: scene.flip,

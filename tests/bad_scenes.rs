@@ -229,6 +229,37 @@ fn bad_scenes_give_their_messages() {
             "Snapshots is listed twice in outputs",
             Some(19),
         ),
+        // The delta-correction's constants (`step::spacing`).
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: DeltaCorrection(alpha: 1.5),",
+            "alpha (the fraction of the Gauss-Newton step taken) must lie in (0, 1], got 1.5",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: DeltaCorrection(max_shift: 0.0),",
+            "max_shift (the longest shift in one step, in cells) must lie in (0, 0.5], got 0",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: DeltaCorrection(alhpa: 0.5),",
+            "Unexpected field named `alhpa`",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: DeltaCorrection(refinement: 0),",
+            "refinement (the correction grid's cells per step cell) must be 1, 2, 3 or 4, got 0",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: On,",
+            "Unexpected variant named `On`",
+            Some(7),
+        ),
     ];
     let registries = Regolith::default().registries();
     let mut wrong = Vec::new();

@@ -64,18 +64,8 @@ fn a_resumed_run_is_bitwise_identical() {
     for _ in 0..60 {
         first.step().unwrap();
     }
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("checkpoint.bin");
-    Checkpoint::capture(&mut first, &scene, "resume.ron", &[])
-        .write(&path)
-        .unwrap();
+    let mut resumed = common::checkpoint_and_restore(&mut first, &scene);
     drop(first);
-
-    let mut resumed = Simulation::unobserved(&scene);
-    Checkpoint::read(&path)
-        .unwrap()
-        .restore(&mut resumed, &scene)
-        .unwrap();
     assert_eq!(resumed.clock().step, 60);
     resumed.run(|_| {}).unwrap();
 

@@ -248,11 +248,7 @@ fn a_nonlocal_body_gives_the_same_state_on_one_to_four_threads() {
     let registries = regolith::Regolith::default().registries();
     let scene = regolith::Scene::parse(&text, "chute_nonlocal.ron", &registries).unwrap();
     let state = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::with_threads(threads, || {
             let mut sim = Simulation::new(&scene);
             for _ in 0..60 {
                 sim.step().unwrap();

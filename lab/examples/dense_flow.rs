@@ -38,9 +38,9 @@ fn main() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     let material = ps1();
     println!(
-        "| angle | cells/depth | t (s) | top/H | sum V / area | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | wall (s) |"
+        "| angle | cells/depth | t (s) | top/H | sum V / area | most in a cell | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | wall (s) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for &deg in &angles {
         for &per_depth in &resolutions {
             let profile = Bagnold::new(&material, deg.to_radians(), DEPTH, 9.81);
@@ -48,9 +48,10 @@ fn main() {
             let started = std::time::Instant::now();
             let row = |t: f64, m: &ChuteState| {
                 println!(
-                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.1e} | {:.0} |",
+                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.1e} | {:.0} |",
                     m.top / DEPTH,
                     m.volume_ratio,
+                    m.most_in_a_cell,
                     m.disconnected,
                     m.disconnected_bulk,
                     m.mean_speed,

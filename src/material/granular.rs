@@ -352,6 +352,9 @@ macro_rules! trans_phase_material {
                 let f: fn(&TransPhase) -> Option<f64> = $inertial;
                 f(&self.0)
             }
+            fn granular(&self) -> bool {
+                true
+            }
             fn update(&self, stress: &mut Stress, _h: &mut (), step: &PointStep) -> PointOutcome {
                 self.0.update(stress, step)
             }

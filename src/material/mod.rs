@@ -60,6 +60,13 @@ pub trait Material: Item {
     fn inertial_scale(&self) -> Option<f64> {
         None
     }
+    /// Whether the material is granular: its stress keeps no memory of where its points sit
+    /// beyond the elastic strain at yield, so the delta-correction (the scene's `spacing`,
+    /// `step::spacing`) may shift them; false by default (an elastic body's points are not
+    /// moved, which would deform it without a stress).
+    fn granular(&self) -> bool {
+        false
+    }
     /// Whether steps of at most `max_dt` (s) on cells of `cell_size` (m) suit this material
     /// (the scene check asks, before a run); by default any do.
     fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {
@@ -100,6 +107,7 @@ pub trait MaterialSpec: DynItem {
     fn lithostatic_ratio(&self) -> f64;
     fn initial_volume(&self, mass: f64, stress: &Stress) -> f64;
     fn inertial_scale(&self) -> Option<f64>;
+    fn granular(&self) -> bool;
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
@@ -130,6 +138,9 @@ impl<M: Material> MaterialSpec for M {
     }
     fn inertial_scale(&self) -> Option<f64> {
         Material::inertial_scale(self)
+    }
+    fn granular(&self) -> bool {
+        Material::granular(self)
     }
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
         Material::check_step(self, cell_size, max_dt)

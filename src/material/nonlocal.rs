@@ -427,6 +427,9 @@ impl Material for Nonlocal {
     fn inertial_scale(&self) -> Option<f64> {
         Some(self.base.grain_diameter * self.base.grain_density.sqrt())
     }
+    fn granular(&self) -> bool {
+        true
+    }
     /// The explicit Laplacian needs the diffusion number `A^2 d^2 dt/(t0 h^2)` at most 1/4.
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
         let ad = self.amplitude * self.base.grain_diameter;

@@ -25,6 +25,7 @@ use crate::material::MaterialSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
 use crate::shape_functions::{CpdiFixed, ShapeFunctions};
+use crate::step::spacing::Spacing;
 use crate::velocity::{AffineFlip, Transfer};
 
 pub use crate::resources::{TimeStep, Wall, Walls};
@@ -54,6 +55,11 @@ pub struct Scene {
     /// How the dilatation `tr L` is taken: `CellAveraged` (default) or `PerPoint`.
     #[serde(default)]
     pub dilatation: Dilatation,
+    /// Whether points are moved off over-filled nodes after each move: `Off` (default) or
+    /// `DeltaCorrection(alpha: 1.0, max_shift: 0.1)` (Baumgarten & Kamrin 2023;
+    /// `step::spacing`, docs/numerics.md).
+    #[serde(default)]
+    pub spacing: Spacing,
     /// How bodies interact where they share grid nodes: `NoSlip` (default) or
     /// `Frictional(friction: mu)`, or a plugin's law.
     #[serde(default = "default_contact")]

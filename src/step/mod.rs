@@ -3,8 +3,9 @@
 //! [`schedule`] lists every core system in its set, in order: read it first. The other
 //! modules are the systems: `prepare` (the clock), `locate` (each point's footprint, cell
 //! and band), `transfer` (scatter, gather, MUSL's passes, the move), `cell_average` (the
-//! cell-averaged dilatation, stress trace and density), `grid_update` (walls) and `bands`
-//! (the lock-free parallel scatter).
+//! cell-averaged dilatation, stress trace and density), `spacing` (the delta-correction that
+//! moves points off over-filled nodes), `grid_update` (walls) and `bands` (the lock-free
+//! parallel scatter).
 
 pub(crate) mod bands;
 pub mod cell_average;
@@ -12,6 +13,7 @@ mod grid_update;
 mod locate;
 mod prepare;
 mod schedule;
+pub mod spacing;
 pub mod transfer;
 
 pub use bands::Bands;

@@ -10,7 +10,8 @@
 //! GridToParticle     grid_to_particle | affine_to_particle::<S> (USL)
 //!                    | musl_velocity, musl_remap, musl_gradient | musl_apic_gradient::<S> (MUSL)
 //!                    then average_dilatation, advect_points, cell_density (CellAveraged)
-//!                    or advect_points, point_density (PerPoint)
+//!                    or advect_points, point_density (PerPoint), with the scene's
+//!                    `spacing: DeltaCorrection(..)` correct_spacing after advect_points
 //! ConstitutiveUpdate update_stress::<M> per material type       (added by the material item)
 //! Diagnostics        advance_clock, survey_bodies, check_energy, decide_output
 //! Output             record_trajectory, then the outputs' own systems when due
@@ -29,6 +30,7 @@ use std::time::{Duration, Instant};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
+use super::spacing::{self, Spacing};
 use super::{cell_average, grid_update, locate, prepare, transfer};
 use crate::diagnostics;
 use crate::output::trajectory;
@@ -159,6 +161,8 @@ pub struct StepOptions<'a> {
     pub dilatation: Dilatation,
     /// Whether points carry an affine field (the transfer's `affine`).
     pub affine: bool,
+    /// Whether the delta-correction follows the move.
+    pub spacing: Spacing,
 }
 
 /// The schedule of one step with the core systems for the given options.
@@ -202,6 +206,15 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
                     .after(Gather),
             );
         }
+    }
+    if let Spacing::DeltaCorrection(_) = options.spacing {
+        schedule.add_systems(
+            spacing::correct_spacing
+                .in_set(after_gather)
+                .after(transfer::advect_points)
+                .before(transfer::point_density)
+                .before(cell_average::cell_density),
+        );
     }
     // ConstitutiveUpdate: one `update_stress::<M>` per material of the scene, added by the
     // material item (`MaterialSpec::add_systems`) into `Core(ConstitutiveUpdate)`.

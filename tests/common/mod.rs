@@ -54,6 +54,32 @@ pub fn bed_and_disc_fingerprints(sim: &mut Simulation) -> [u64; 2] {
     ["bed", "disc"].map(|name| sim.points(name).unwrap().fingerprint())
 }
 
+/// Runs `f` on a rayon pool of `threads` threads.
+pub fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// Writes `sim`'s checkpoint (of `scene`) to a temporary file and restores it into a fresh
+/// simulation, as `regolith resume` does.
+pub fn checkpoint_and_restore(sim: &mut Simulation, scene: &regolith::Scene) -> Simulation {
+    use regolith::checkpoint::Checkpoint;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("checkpoint.bin");
+    Checkpoint::capture(sim, scene, "scene.ron", &[])
+        .write(&path)
+        .unwrap();
+    let mut resumed = Simulation::unobserved(scene);
+    Checkpoint::read(&path)
+        .unwrap()
+        .restore(&mut resumed, scene)
+        .unwrap();
+    resumed
+}
+
 /// A small deterministic generator (xorshift), uniform in [-1, 1).
 pub struct Rng(pub u64);
 impl Rng {

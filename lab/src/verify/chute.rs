@@ -165,6 +165,9 @@ pub struct ChuteState {
     /// RMS over cell rows of (row-mean speed - analytic), over the analytic surface
     /// speed; `None` without a profile.
     pub profile_error: Option<f64>,
+    /// The most points in one grid cell (the layer starts with `points_per_cell^2`): how far
+    /// the points have crowded together (docs/numerics.md, "Points that keep their spacing").
+    pub most_in_a_cell: usize,
 }
 
 /// Measures a chute layer of width `width` on a grid of cell size `cell`; `profile` is the
@@ -213,7 +216,14 @@ pub fn measure(
         let ms = errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64;
         ms.sqrt() / b.surface_speed()
     });
+    let mut per_cell = std::collections::HashMap::new();
+    for x in &points.position {
+        *per_cell
+            .entry(((x.x / cell).floor() as i64, (x.y / cell).floor() as i64))
+            .or_insert(0usize) += 1;
+    }
     ChuteState {
+        most_in_a_cell: per_cell.values().copied().max().unwrap_or(0),
         top,
         volume_ratio: volume / (width * top),
         disconnected_bulk,

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::body::Points;
 use crate::grid::GridGeometry;
 
-use crate::resources::{Boundaries, Clock, Wall};
+use crate::resources::{Boundaries, Clock, Wall, Walls};
 
 /// The density the constitutive update sees: each point's own `m/V`.
 pub fn point_density(mut bodies: Query<&mut Points>) {
@@ -20,6 +20,23 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
             .zip(points.mass.par_iter().zip(points.volume.par_iter()))
             .for_each(|(rho, (&m, &v))| *rho = m / v);
     }
+}
+
+/// The box the walls keep points in: a `Slip`, `NoSlip` or `Open` side bounds it, a `Free` or
+/// periodic one does not (a point past a free side stops the run; periodic sides wrap).
+pub(crate) fn kept_box(grid: &GridGeometry, w: &Walls) -> (DVec2, DVec2) {
+    let (lo, hi) = (grid.origin, grid.max());
+    let kept = |wall: Wall| matches!(wall, Wall::Slip | Wall::NoSlip | Wall::Open);
+    let bound = |wall: Wall, at: f64, far: f64| if kept(wall) { at } else { far };
+    let min = DVec2::new(
+        bound(w.left, lo.x, f64::NEG_INFINITY),
+        bound(w.bottom, lo.y, f64::NEG_INFINITY),
+    );
+    let max = DVec2::new(
+        bound(w.right, hi.x, f64::INFINITY),
+        bound(w.top, hi.y, f64::INFINITY),
+    );
+    (min, max)
 }
 
 /// Moves every point by its advection velocity and updates its volume, `V *= exp(dt tr L)`.
@@ -37,18 +54,8 @@ pub fn advect_points(
     mut bodies: Query<&mut Points>,
 ) {
     let (dt, grid) = (clock.dt, &*grid);
-    let (lo, hi) = (grid.origin, grid.max());
     let w = walls.0;
-    let kept = |wall: Wall| matches!(wall, Wall::Slip | Wall::NoSlip | Wall::Open);
-    let bound = |wall: Wall, at: f64, far: f64| if kept(wall) { at } else { far };
-    let min = DVec2::new(
-        bound(w.left, lo.x, f64::NEG_INFINITY),
-        bound(w.bottom, lo.y, f64::NEG_INFINITY),
-    );
-    let max = DVec2::new(
-        bound(w.right, hi.x, f64::INFINITY),
-        bound(w.top, hi.y, f64::INFINITY),
-    );
+    let (min, max) = kept_box(grid, &w);
     // Per axis: whether leaving through the low / high side retires the point.
     let open = [
         [w.left == Wall::Open, w.right == Wall::Open],

@@ -16,6 +16,7 @@ mod gather;
 mod musl;
 mod scatter;
 
+pub(crate) use advect::kept_box;
 pub use advect::{advect_points, point_density};
 pub use gather::{VelocityUpdate, affine_to_particle, apic_gather, grid_to_particle};
 pub use musl::{musl_apic_gradient, musl_gradient, musl_remap, musl_velocity};

@@ -1,0 +1,515 @@
+//! The delta-correction of Baumgarten & Kamrin (2023, Int. J. Numer. Methods Eng., doi
+//! 10.1002/nme.7217): after the move, points are shifted off grid nodes that their volumes
+//! over-fill, positions only.
+//!
+//! Why: with the cell-averaged dilatation a cell's sub-cell velocity modes have no volumetric
+//! stiffness, so in a long dense flow points drift together while each keeps its volume
+//! `V0 det F`; the layer's occupied area shrinks at constant summed volume and nothing pushes
+//! back (a 0.1 m chute at 22.5 degrees: top 0.068 m, 15 points in one cell at 20 s;
+//! docs/numerics.md, "Points that keep their spacing"). The correction measures crowding on
+//! the nodes and moves the crowded points apart:
+//!
+//! 1. `Vpts_i = sum_p V_p S_i(x_p)` with linear hats, over the points of every body (a node
+//!    another body fills is full for this one too), on the step's grid or on one `refinement`
+//!    times finer (which sees clumps smaller than a step cell);
+//! 2. `Vref_i`, the integral of `S_i` over the domain, the region material may fill: `h^2`
+//!    inside, half of it on a wall, a quarter in a corner, nothing special across a periodic
+//!    side;
+//! 3. `H_i = max(0, Vpts_i - Vref_i)`, over-fill only (beyond a round-off tolerance): a free
+//!    surface or a void pulls nothing in, and a lattice at rest is not touched;
+//! 4. `g_p = V_p sum_i H_i grad S_i(x_p)`, the gradient of `E = 1/2 sum_i H_i^2` in `x_p`;
+//! 5. `delta_p = -alpha beta g_p`, `beta = sum_p |g_p|^2 / sum_i d_i^2` with
+//!    `d_i = sum_p V_p grad S_i(x_p) . g_p` (the Gauss-Newton step on `E` along `-g`), each
+//!    shift at most `max_shift` step cells long;
+//! 6. `x_p += delta_p`, kept inside the walls as the move keeps points. Velocities, affine
+//!    fields, volumes, stresses and material history are untouched: mass and momentum are
+//!    exactly conserved.
+//!
+//! Only the points of granular bodies move (`MaterialSpec::granular`): their stress
+//! keeps no memory of where the points sit, while shifting an elastic body's points would
+//! deform it without a stress. The sums run serially in point order, so the result is the same
+//! at every thread count; the per-point passes run in parallel.
+
+use bevy_ecs::prelude::*;
+use glam::DVec2;
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use super::transfer::kept_box;
+use crate::body::{Body, Points};
+use crate::grid::GridGeometry;
+use crate::resources::Boundaries;
+
+/// Over-fill below this fraction of a node's reference volume is round-off, not crowding.
+const ROUND_OFF: f64 = 1e-9;
+
+/// The scene's `spacing` setting: `Off` (the default) or `DeltaCorrection(..)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(try_from = "SpacingParams")]
+pub enum Spacing {
+    /// Points keep the positions the move gives them.
+    #[default]
+    Off,
+    /// Baumgarten & Kamrin's delta-correction after every move (module docs).
+    DeltaCorrection(DeltaCorrection),
+}
+
+/// The constants of the delta-correction.
+#[derive(Clone, Copy, Debug, PartialEq, Resource)]
+pub struct DeltaCorrection {
+    /// Fraction of the Gauss-Newton step taken, in (0, 1].
+    pub alpha: f64,
+    /// Longest shift of one point in one step, in cells, in (0, 0.5].
+    pub max_shift: f64,
+    /// The correction grid's cells per step cell along each axis: 1 (the paper's, the step's
+    /// own grid) or more (finer; 2 sees clumps smaller than a step cell).
+    pub refinement: usize,
+}
+
+impl Default for DeltaCorrection {
+    fn default() -> Self {
+        DeltaCorrection {
+            alpha: 1.0,
+            max_shift: 0.1,
+            refinement: 1,
+        }
+    }
+}
+
+/// `spacing` as written: the constants optional.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+enum SpacingParams {
+    Off,
+    DeltaCorrection {
+        alpha: Option<f64>,
+        max_shift: Option<f64>,
+        refinement: Option<usize>,
+    },
+}
+
+impl TryFrom<SpacingParams> for Spacing {
+    type Error = String;
+    fn try_from(p: SpacingParams) -> Result<Self, String> {
+        let SpacingParams::DeltaCorrection {
+            alpha,
+            max_shift,
+            refinement,
+        } = p
+        else {
+            return Ok(Spacing::Off);
+        };
+        let d = DeltaCorrection::default();
+        let c = DeltaCorrection {
+            alpha: alpha.unwrap_or(d.alpha),
+            max_shift: max_shift.unwrap_or(d.max_shift),
+            refinement: refinement.unwrap_or(d.refinement),
+        };
+        if !(c.alpha > 0.0 && c.alpha <= 1.0) {
+            return Err(format!(
+                "DeltaCorrection: alpha (the fraction of the Gauss-Newton step taken) must lie in (0, 1], got {}",
+                c.alpha
+            ));
+        }
+        if !(c.max_shift > 0.0 && c.max_shift <= 0.5) {
+            return Err(format!(
+                "DeltaCorrection: max_shift (the longest shift in one step, in cells) must lie in (0, 0.5], got {}",
+                c.max_shift
+            ));
+        }
+        if !(1..=4).contains(&c.refinement) {
+            return Err(format!(
+                "DeltaCorrection: refinement (the correction grid's cells per step cell) must be 1, 2, 3 or 4, got {}",
+                c.refinement
+            ));
+        }
+        Ok(Spacing::DeltaCorrection(c))
+    }
+}
+
+/// The correction's nodal arrays, kept between steps so that a step allocates nothing.
+#[derive(Resource, Default)]
+pub struct SpacingScratch {
+    /// `Vpts_i`, then `H_i`.
+    fill: Vec<f64>,
+    /// `d_i`.
+    slope: Vec<f64>,
+    /// Per body, per point: `g_p`.
+    gradient: Vec<Vec<DVec2>>,
+}
+
+/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
+/// for a point outside the grid (past a `Free` side, about to stop the run).
+fn hats(grid: &GridGeometry, x: DVec2) -> Option<[(usize, f64, DVec2); 4]> {
+    let h = grid.cell_size;
+    let rel = (x - grid.origin) / h;
+    let inside = |a: usize| rel[a] >= 0.0 && rel[a] <= grid.cells[a] as f64;
+    if !(inside(0) && inside(1)) {
+        return None;
+    }
+    let [i, j] = grid.cell_at(x, 1.0 / h);
+    let (fx, fy) = (rel.x - i as f64, rel.y - j as f64);
+    let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
+    let (i1, j1) = ((i + 1) % nx, (j + 1) % ny);
+    let node = |a: usize, b: usize| grid.index(a, b);
+    Some([
+        (
+            node(i, j),
+            (1.0 - fx) * (1.0 - fy),
+            DVec2::new(-(1.0 - fy), -(1.0 - fx)) / h,
+        ),
+        (node(i1, j), fx * (1.0 - fy), DVec2::new(1.0 - fy, -fx) / h),
+        (node(i, j1), (1.0 - fx) * fy, DVec2::new(-fy, 1.0 - fx) / h),
+        (node(i1, j1), fx * fy, DVec2::new(fy, fx) / h),
+    ])
+}
+
+/// `Vref_i` of node `(i, j)`: the integral of its hat over the domain.
+fn reference_volume(grid: &GridGeometry, i: usize, j: usize) -> f64 {
+    let share = |k: usize, a: usize| {
+        if !grid.periodic[a] && (k == 0 || k == grid.cells[a]) {
+            0.5
+        } else {
+            1.0
+        }
+    };
+    grid.cell_size * grid.cell_size * share(i, 0) * share(j, 1)
+}
+
+/// The delta-correction, once, after the move (before the density the constitutive update
+/// reads). Added to the step only when the scene's `spacing` is a `DeltaCorrection`.
+pub fn correct_spacing(
+    grid: Res<GridGeometry>,
+    walls: Res<Boundaries>,
+    constants: Res<DeltaCorrection>,
+    mut scratch: ResMut<SpacingScratch>,
+    mut bodies: Query<(&Body, &mut Points)>,
+) {
+    let step_grid = &*grid;
+    let r = constants.refinement;
+    let grid = &GridGeometry {
+        origin: step_grid.origin,
+        cell_size: step_grid.cell_size / r as f64,
+        cells: step_grid.cells.map(|c| c * r),
+        periodic: step_grid.periodic,
+    };
+    let scratch = &mut *scratch;
+    let nodes = grid.node_count();
+    scratch.fill.clear();
+    scratch.fill.resize(nodes, 0.0);
+    // 1. Vpts over every body, serially in body and point order (deterministic sums).
+    let mut ordered: Vec<(&Body, Mut<Points>)> = bodies.iter_mut().collect();
+    ordered.sort_by_key(|(b, _)| b.index);
+    for (_, points) in &ordered {
+        for (&x, &v) in points.position.iter().zip(&points.volume) {
+            for (i, w, _) in hats(grid, x).into_iter().flatten() {
+                scratch.fill[i] += v * w;
+            }
+        }
+    }
+    // 2-3. H_i = max(0, Vpts_i - Vref_i), beyond round-off.
+    let nx = grid.nodes_along(0);
+    let mut crowded = false;
+    for (k, fill) in scratch.fill.iter_mut().enumerate() {
+        let reference = reference_volume(grid, k % nx, k / nx);
+        let over = *fill - reference;
+        *fill = if over > ROUND_OFF * reference {
+            crowded = true;
+            over
+        } else {
+            0.0
+        };
+    }
+    if !crowded {
+        return;
+    }
+    // 4. g_p for the points of the corrected bodies, in parallel.
+    scratch.gradient.resize_with(ordered.len(), Vec::new);
+    let over = &scratch.fill;
+    for ((body, points), g) in ordered.iter().zip(scratch.gradient.iter_mut()) {
+        g.clear();
+        if !body.granular {
+            continue;
+        }
+        points
+            .position
+            .par_iter()
+            .zip(points.volume.par_iter())
+            .map(|(&x, &v)| {
+                hats(grid, x).map_or(DVec2::ZERO, |hats| {
+                    v * hats
+                        .iter()
+                        .fold(DVec2::ZERO, |s, &(i, _, grad)| s + over[i] * grad)
+                })
+            })
+            .collect_into_vec(g);
+    }
+    // 5. beta = sum |g|^2 / sum_i d_i^2, serially.
+    scratch.slope.clear();
+    scratch.slope.resize(nodes, 0.0);
+    let mut squared = 0.0;
+    for ((_, points), g) in ordered.iter().zip(&scratch.gradient) {
+        for ((&x, &v), &gp) in points.position.iter().zip(&points.volume).zip(g) {
+            squared += gp.length_squared();
+            for (i, _, grad) in hats(grid, x).into_iter().flatten() {
+                scratch.slope[i] += v * grad.dot(gp);
+            }
+        }
+    }
+    let curvature: f64 = scratch.slope.iter().map(|d| d * d).sum();
+    if !(squared > 0.0 && curvature > 0.0) {
+        return;
+    }
+    let beta = constants.alpha * squared / curvature;
+    let longest = constants.max_shift * step_grid.cell_size;
+    let (min, max) = kept_box(grid, &walls.0);
+    // 6. The shifts, clamped, kept inside the walls.
+    for ((_, points), g) in ordered.iter_mut().zip(&scratch.gradient) {
+        if g.is_empty() {
+            continue;
+        }
+        points
+            .position
+            .par_iter_mut()
+            .zip(g.par_iter())
+            .for_each(|(x, &gp)| {
+                let shift = -beta * gp;
+                let length = shift.length();
+                let shift = if length > longest {
+                    shift * (longest / length)
+                } else {
+                    shift
+                };
+                *x = grid.wrap(*x + shift).clamp(min, max);
+            });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy_ecs::system::RunSystemOnce;
+
+    use super::*;
+    use crate::resources::{Wall, Walls};
+
+    const H: f64 = 0.01;
+
+    fn body(index: usize, granular: bool) -> Body {
+        Body {
+            name: format!("b{index}"),
+            index,
+            tracked: false,
+            material: "test",
+            wave_speed: 1.0,
+            inertial_scale: None,
+            granular,
+        }
+    }
+
+    /// 2 x 2 points per cell over cells `[x0, x1) x [y0, y1)`, each of volume `h^2 / 4`,
+    /// with velocities that a correction must leave alone.
+    fn lattice(x: [usize; 2], y: [usize; 2]) -> Points {
+        let mut p = Points::default();
+        for j in 2 * y[0]..2 * y[1] {
+            for i in 2 * x[0]..2 * x[1] {
+                let at = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * (0.5 * H);
+                p.position.push(at);
+                p.volume.push(0.25 * H * H);
+                p.mass.push(1.0);
+                p.velocity.push(DVec2::new(at.y, -at.x));
+            }
+        }
+        p
+    }
+
+    fn world(cells: [usize; 2], walls: Walls, bodies: Vec<(Body, Points)>) -> World {
+        let periodic = [walls.left == Wall::Periodic, walls.bottom == Wall::Periodic];
+        let mut world = World::new();
+        world.insert_resource(GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: H,
+            cells,
+            periodic,
+        });
+        world.insert_resource(Boundaries(walls));
+        world.insert_resource(DeltaCorrection::default());
+        world.insert_resource(SpacingScratch::default());
+        for b in bodies {
+            world.spawn(b);
+        }
+        world
+    }
+
+    fn walls(side: Wall, floor: Wall) -> Walls {
+        Walls {
+            left: side,
+            right: side,
+            bottom: floor,
+            top: Wall::Free,
+        }
+    }
+
+    fn positions(world: &mut World) -> Vec<Vec<DVec2>> {
+        let mut q = world.query::<(&Body, &Points)>();
+        let mut all: Vec<_> = q.iter(world).map(|(b, p)| (b.index, p.clone())).collect();
+        all.sort_by_key(|(i, _)| *i);
+        all.into_iter().map(|(_, p)| p.position).collect()
+    }
+
+    fn correct(world: &mut World) {
+        world.run_system_once(correct_spacing).unwrap();
+    }
+
+    /// A body that fills its region exactly over-fills no node, on walls of every kind and
+    /// across periodic sides: no point moves, to the bit.
+    #[test]
+    fn a_full_lattice_is_not_moved() {
+        for (side, floor) in [
+            (Wall::Slip, Wall::NoSlip),
+            (Wall::Periodic, Wall::NoSlip),
+            (Wall::Open, Wall::Slip),
+        ] {
+            let mut w = world(
+                [8, 6],
+                walls(side, floor),
+                vec![(body(0, true), lattice([0, 8], [0, 4]))],
+            );
+            let before = positions(&mut w);
+            correct(&mut w);
+            assert_eq!(positions(&mut w), before, "{side:?} sides, {floor:?} floor");
+        }
+    }
+
+    /// Two bodies that meet fill the nodes they share together, so neither is pushed.
+    #[test]
+    fn bodies_that_meet_are_not_pushed_apart() {
+        let mut w = world(
+            [8, 6],
+            walls(Wall::Slip, Wall::NoSlip),
+            vec![
+                (body(0, true), lattice([0, 4], [0, 4])),
+                (body(1, false), lattice([4, 8], [0, 4])),
+            ],
+        );
+        let before = positions(&mut w);
+        correct(&mut w);
+        assert_eq!(positions(&mut w), before);
+    }
+
+    /// The clump: a lattice whose middle points are squeezed towards the centre of the body.
+    fn squeezed(x: [usize; 2], y: [usize; 2], centre: DVec2) -> Points {
+        let mut p = lattice(x, y);
+        for at in &mut p.position {
+            if (*at - centre).length() < 1.5 * H {
+                *at = centre + 0.6 * (*at - centre);
+            }
+        }
+        p
+    }
+
+    fn over_fill(world: &mut World) -> f64 {
+        let grid = world.resource::<GridGeometry>().clone();
+        let mut fill = vec![0.0; grid.node_count()];
+        let mut q = world.query::<&Points>();
+        for p in q.iter(world) {
+            for (&x, &v) in p.position.iter().zip(&p.volume) {
+                for (i, w, _) in hats(&grid, x).into_iter().flatten() {
+                    fill[i] += v * w;
+                }
+            }
+        }
+        let nx = grid.nodes_along(0);
+        fill.iter()
+            .enumerate()
+            .map(|(k, f)| {
+                (f - reference_volume(&grid, k % nx, k / nx))
+                    .max(0.0)
+                    .powi(2)
+            })
+            .sum::<f64>()
+            / 2.0
+    }
+
+    /// A clump is spread: the over-fill energy falls, every shift is at most `max_shift`
+    /// cells, velocities, volumes and masses are untouched (momentum exact), and an elastic
+    /// body's points are never moved.
+    #[test]
+    fn a_clump_spreads_and_nothing_but_positions_changes() {
+        let centre = DVec2::new(3.0, 2.0) * H;
+        let mut w = world(
+            [10, 6],
+            walls(Wall::Slip, Wall::NoSlip),
+            vec![
+                (body(0, true), squeezed([0, 6], [0, 4], centre)),
+                (body(1, false), lattice([6, 10], [0, 4])),
+            ],
+        );
+        let mut q = w.query::<(&Body, &Points)>();
+        let before: Vec<(usize, Points)> = q.iter(&w).map(|(b, p)| (b.index, p.clone())).collect();
+        let energy = over_fill(&mut w);
+        correct(&mut w);
+        let after_energy = over_fill(&mut w);
+        assert!(
+            after_energy < 0.5 * energy,
+            "over-fill energy {energy:e} -> {after_energy:e}"
+        );
+        let mut q = w.query::<(&Body, &Points)>();
+        for (b, p) in q.iter(&w) {
+            let old = &before.iter().find(|(i, _)| *i == b.index).unwrap().1;
+            assert_eq!(p.velocity, old.velocity);
+            assert_eq!(p.volume, old.volume);
+            assert_eq!(p.mass, old.mass);
+            let moved = p
+                .position
+                .iter()
+                .zip(&old.position)
+                .map(|(a, b)| (*a - *b).length())
+                .fold(0.0, f64::max);
+            if b.granular {
+                assert!(
+                    moved > 0.0 && moved <= 0.1 * H * (1.0 + 1e-12),
+                    "moved {moved:e}"
+                );
+            } else {
+                assert_eq!(moved, 0.0, "the elastic body moved");
+            }
+        }
+    }
+
+    /// Across a periodic side the correction sees the same clump as inside: a clump moved
+    /// by whole cells across the seam gets the same shifts.
+    #[test]
+    fn a_clump_across_a_periodic_side_is_spread_as_inside() {
+        let shifts = |offset: usize| {
+            let centre = DVec2::new(4.0, 2.0) * H;
+            let mut p = squeezed([0, 8], [0, 4], centre);
+            let size = 8.0 * H;
+            for x in &mut p.position {
+                x.x = (x.x + offset as f64 * H).rem_euclid(size);
+            }
+            let start = p.position.clone();
+            let mut w = world(
+                [8, 6],
+                walls(Wall::Periodic, Wall::NoSlip),
+                vec![(body(0, true), p)],
+            );
+            correct(&mut w);
+            let end = positions(&mut w).remove(0);
+            start
+                .iter()
+                .zip(&end)
+                .map(|(a, b)| {
+                    let mut d = *b - *a;
+                    d.x -= size * (d.x / size).round();
+                    d
+                })
+                .collect::<Vec<DVec2>>()
+        };
+        let inside = shifts(0);
+        let across = shifts(4);
+        for (a, b) in inside.iter().zip(&across) {
+            assert!((*a - *b).length() < 1e-12 * H, "{a} against {b}");
+        }
+        assert!(inside.iter().any(|d| d.length() > 1e-4 * H));
+    }
+}
