@@ -256,6 +256,12 @@ fn bad_scenes_give_their_messages() {
         ),
         (
             6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: DeltaCorrection(pull_above: 1.2),",
+            "pull_above (the fill from which an under-filled node pulls points in) must lie in (0, 1], got 1.2",
+            Some(7),
+        ),
+        (
+            6,
             "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    spacing: On,",
             "Unexpected variant named `On`",
             Some(7),

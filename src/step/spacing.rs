@@ -16,7 +16,11 @@
 //!    inside, half of it on a wall, a quarter in a corner, nothing special across a periodic
 //!    side;
 //! 3. `H_i = max(0, Vpts_i - Vref_i)`, over-fill only (beyond a round-off tolerance): a free
-//!    surface or a void pulls nothing in, and a lattice at rest is not touched;
+//!    surface or a void pulls nothing in, and a lattice at rest is not touched. That form
+//!    only ever pushes points apart, so position noise ratchets a layer open; the two-sided
+//!    form (`pull_above < 1`) also takes `H_i = Vpts_i - Vref_i < 0` at nodes at least
+//!    `pull_above` full and more than 1% under-filled (inside the material, where a gap
+//!    between points that their volumes do not account for is the same error as a crowd);
 //! 4. `g_p = V_p sum_i H_i grad S_i(x_p)`, the gradient of `E = 1/2 sum_i H_i^2` in `x_p`;
 //! 5. `delta_p = -alpha beta g_p`, `beta = sum_p |g_p|^2 / sum_i d_i^2` with
 //!    `d_i = sum_p V_p grad S_i(x_p) . g_p` (the Gauss-Newton step on `E` along `-g`), each
@@ -43,6 +47,11 @@ use crate::resources::Boundaries;
 /// Over-fill below this fraction of a node's reference volume is round-off, not crowding.
 const ROUND_OFF: f64 = 1e-9;
 
+/// With the two-sided form, under-fill within this fraction of a node's reference volume is
+/// left alone: it is the elastic compression of a dense material (`p / K`, 1.5e-4 at the
+/// bottom of a 1 m PS-1 bed), which the points' volumes carry and their spacing need not.
+const SLACK: f64 = 0.01;
+
 /// The scene's `spacing` setting: `Off` (the default) or `DeltaCorrection(..)`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 #[serde(try_from = "SpacingParams")]
@@ -64,6 +73,11 @@ pub struct DeltaCorrection {
     /// The correction grid's cells per step cell along each axis: 1 (the paper's, the step's
     /// own grid) or more (finer; 2 sees clumps smaller than a step cell).
     pub refinement: usize,
+    /// From which fill (a fraction of the reference volume) an under-filled node counts as
+    /// inside the material and pulls points in, as an over-filled one pushes them out: in
+    /// (0, 1]; 1 is the paper's one-sided form (no node pulls). A node at a free surface is
+    /// about half full, so a value above 1/2 leaves surfaces, voids and loose material alone.
+    pub pull_above: f64,
 }
 
 impl Default for DeltaCorrection {
@@ -72,6 +86,7 @@ impl Default for DeltaCorrection {
             alpha: 1.0,
             max_shift: 0.1,
             refinement: 1,
+            pull_above: 1.0,
         }
     }
 }
@@ -85,6 +100,7 @@ enum SpacingParams {
         alpha: Option<f64>,
         max_shift: Option<f64>,
         refinement: Option<usize>,
+        pull_above: Option<f64>,
     },
 }
 
@@ -95,6 +111,7 @@ impl TryFrom<SpacingParams> for Spacing {
             alpha,
             max_shift,
             refinement,
+            pull_above,
         } = p
         else {
             return Ok(Spacing::Off);
@@ -104,6 +121,7 @@ impl TryFrom<SpacingParams> for Spacing {
             alpha: alpha.unwrap_or(d.alpha),
             max_shift: max_shift.unwrap_or(d.max_shift),
             refinement: refinement.unwrap_or(d.refinement),
+            pull_above: pull_above.unwrap_or(d.pull_above),
         };
         if !(c.alpha > 0.0 && c.alpha <= 1.0) {
             return Err(format!(
@@ -121,6 +139,12 @@ impl TryFrom<SpacingParams> for Spacing {
             return Err(format!(
                 "DeltaCorrection: refinement (the correction grid's cells per step cell) must be 1, 2, 3 or 4, got {}",
                 c.refinement
+            ));
+        }
+        if !(c.pull_above > 0.0 && c.pull_above <= 1.0) {
+            return Err(format!(
+                "DeltaCorrection: pull_above (the fill from which an under-filled node pulls points in) must lie in (0, 1], got {}",
+                c.pull_above
             ));
         }
         Ok(Spacing::DeltaCorrection(c))
@@ -207,13 +231,15 @@ pub fn correct_spacing(
             }
         }
     }
-    // 2-3. H_i = max(0, Vpts_i - Vref_i), beyond round-off.
+    // 2-3. H_i = Vpts_i - Vref_i where over-filled beyond round-off, or (two-sided)
+    // under-filled beyond the slack but at least `pull_above` full; 0 elsewhere.
     let nx = grid.nodes_along(0);
     let mut crowded = false;
     for (k, fill) in scratch.fill.iter_mut().enumerate() {
         let reference = reference_volume(grid, k % nx, k / nx);
         let over = *fill - reference;
-        *fill = if over > ROUND_OFF * reference {
+        let pulls = *fill >= constants.pull_above * reference && over < -SLACK * reference;
+        *fill = if over > ROUND_OFF * reference || pulls {
             crowded = true;
             over
         } else {
@@ -378,6 +404,42 @@ mod tests {
             correct(&mut w);
             assert_eq!(positions(&mut w), before, "{side:?} sides, {floor:?} floor");
         }
+    }
+
+    /// A layer whose points sit further apart than their volumes say (every node 90% full):
+    /// the one-sided form leaves it, the two-sided form pulls it together (its top comes
+    /// down), and neither touches a layer that is full.
+    #[test]
+    fn the_two_sided_form_closes_a_gap_and_only_it_does() {
+        let top = |pull_above: f64, fill: f64| {
+            let mut p = lattice([0, 8], [0, 4]);
+            for v in &mut p.volume {
+                *v *= fill;
+            }
+            let mut w = world(
+                [8, 6],
+                walls(Wall::Periodic, Wall::NoSlip),
+                vec![(body(0, true), p)],
+            );
+            w.insert_resource(DeltaCorrection {
+                pull_above,
+                ..DeltaCorrection::default()
+            });
+            let before = positions(&mut w).remove(0);
+            correct(&mut w);
+            let after = positions(&mut w).remove(0);
+            let highest = |x: &[DVec2]| x.iter().map(|x| x.y).fold(f64::MIN, f64::max);
+            (highest(&after) - highest(&before)) / H
+        };
+        assert_eq!(top(1.0, 0.9), 0.0);
+        assert_eq!(top(0.75, 1.0), 0.0);
+        assert_eq!(
+            top(0.75, 0.995),
+            0.0,
+            "an under-fill within the slack pulls"
+        );
+        let pulled = top(0.75, 0.9);
+        assert!(pulled < -1e-3, "the top moved by {pulled} cells");
     }
 
     /// Two bodies that meet fill the nodes they share together, so neither is pushed.
