@@ -151,14 +151,21 @@ impl TryFrom<SpacingParams> for Spacing {
     }
 }
 
-/// The correction's nodal arrays, kept between steps so that a step allocates nothing.
+/// A point's four linear-hat nodes with their weights and gradients ([`hats`]).
+type Hats = Option<[(usize, f64, DVec2); 4]>;
+
+/// The correction's arrays, kept between steps so that a step allocates nothing.
 #[derive(Resource, Default)]
 pub struct SpacingScratch {
     /// `Vpts_i`, then `H_i`.
     fill: Vec<f64>,
     /// `d_i`.
     slope: Vec<f64>,
-    /// Per body, per point: `g_p`.
+    /// The bodies in scene order (`Body::index`), so that the sums run in a fixed order.
+    order: Vec<(usize, Entity)>,
+    /// Per body (in `order`), per point: its hats, found once a step.
+    hats: Vec<Vec<Hats>>,
+    /// Per body, per point: `g_p` (empty for a body whose points do not move).
     gradient: Vec<Vec<DVec2>>,
 }
 
@@ -207,7 +214,7 @@ pub fn correct_spacing(
     walls: Res<Boundaries>,
     constants: Res<DeltaCorrection>,
     mut scratch: ResMut<SpacingScratch>,
-    mut bodies: Query<(&Body, &mut Points)>,
+    mut bodies: Query<(Entity, &Body, &mut Points)>,
 ) {
     let step_grid = &*grid;
     let r = constants.refinement;
@@ -217,72 +224,92 @@ pub fn correct_spacing(
         cells: step_grid.cells.map(|c| c * r),
         periodic: step_grid.periodic,
     };
-    let scratch = &mut *scratch;
+    let SpacingScratch {
+        fill,
+        slope,
+        order,
+        hats: all_hats,
+        gradient,
+    } = &mut *scratch;
+    order.clear();
+    order.extend(bodies.iter().map(|(e, b, _)| (b.index, e)));
+    order.sort_unstable();
+    all_hats.resize_with(order.len(), Vec::new);
+    gradient.resize_with(order.len(), Vec::new);
+    // 1. Each point's hats (in parallel), then Vpts over every body, serially in body and
+    //    point order (deterministic sums).
     let nodes = grid.node_count();
-    scratch.fill.clear();
-    scratch.fill.resize(nodes, 0.0);
-    // 1. Vpts over every body, serially in body and point order (deterministic sums).
-    let mut ordered: Vec<(&Body, Mut<Points>)> = bodies.iter_mut().collect();
-    ordered.sort_by_key(|(b, _)| b.index);
-    for (_, points) in &ordered {
-        for (&x, &v) in points.position.iter().zip(&points.volume) {
-            for (i, w, _) in hats(grid, x).into_iter().flatten() {
-                scratch.fill[i] += v * w;
+    fill.clear();
+    fill.resize(nodes, 0.0);
+    for (&(_, entity), hats_of) in order.iter().zip(all_hats.iter_mut()) {
+        let (_, _, points) = bodies.get(entity).expect("a body just listed");
+        points
+            .position
+            .par_iter()
+            .map(|&x| hats(grid, x))
+            .collect_into_vec(hats_of);
+        for (h, &v) in hats_of.iter().zip(&points.volume) {
+            for &(i, w, _) in h.iter().flatten() {
+                fill[i] += v * w;
             }
         }
     }
     // 2-3. H_i = Vpts_i - Vref_i where over-filled beyond round-off, or (two-sided)
     // under-filled beyond the slack but at least `pull_above` full; 0 elsewhere.
     let nx = grid.nodes_along(0);
-    let mut crowded = false;
-    for (k, fill) in scratch.fill.iter_mut().enumerate() {
+    let mut active = false;
+    for (k, node) in fill.iter_mut().enumerate() {
         let reference = reference_volume(grid, k % nx, k / nx);
-        let over = *fill - reference;
-        let pulls = *fill >= constants.pull_above * reference && over < -SLACK * reference;
-        *fill = if over > ROUND_OFF * reference || pulls {
-            crowded = true;
+        let over = *node - reference;
+        let pulls = *node >= constants.pull_above * reference && over < -SLACK * reference;
+        *node = if over > ROUND_OFF * reference || pulls {
+            active = true;
             over
         } else {
             0.0
         };
     }
-    if !crowded {
+    if !active {
         return;
     }
-    // 4. g_p for the points of the corrected bodies, in parallel.
-    scratch.gradient.resize_with(ordered.len(), Vec::new);
-    let over = &scratch.fill;
-    for ((body, points), g) in ordered.iter().zip(scratch.gradient.iter_mut()) {
+    // 4. g_p for the points of the corrected bodies, in parallel (zero for a point none of
+    //    whose nodes is over- or under-filled).
+    let over = &*fill;
+    for ((&(_, entity), hats_of), g) in order.iter().zip(&*all_hats).zip(gradient.iter_mut()) {
         g.clear();
+        let (_, body, points) = bodies.get(entity).expect("a body just listed");
         if !body.granular {
             continue;
         }
-        points
-            .position
+        hats_of
             .par_iter()
             .zip(points.volume.par_iter())
-            .map(|(&x, &v)| {
-                hats(grid, x).map_or(DVec2::ZERO, |hats| {
-                    v * hats
+            .map(|(h, &v)| {
+                h.map_or(DVec2::ZERO, |h| {
+                    v * h
                         .iter()
                         .fold(DVec2::ZERO, |s, &(i, _, grad)| s + over[i] * grad)
                 })
             })
             .collect_into_vec(g);
     }
-    // 5. beta = sum |g|^2 / sum_i d_i^2, serially.
-    scratch.slope.clear();
-    scratch.slope.resize(nodes, 0.0);
+    // 5. beta = sum |g|^2 / sum_i d_i^2, serially over the points that have a gradient.
+    slope.clear();
+    slope.resize(nodes, 0.0);
     let mut squared = 0.0;
-    for ((_, points), g) in ordered.iter().zip(&scratch.gradient) {
-        for ((&x, &v), &gp) in points.position.iter().zip(&points.volume).zip(g) {
+    for ((&(_, entity), hats_of), g) in order.iter().zip(&*all_hats).zip(&*gradient) {
+        let (_, _, points) = bodies.get(entity).expect("a body just listed");
+        for ((h, &v), &gp) in hats_of.iter().zip(&points.volume).zip(g) {
+            if gp == DVec2::ZERO {
+                continue;
+            }
             squared += gp.length_squared();
-            for (i, _, grad) in hats(grid, x).into_iter().flatten() {
-                scratch.slope[i] += v * grad.dot(gp);
+            for &(i, _, grad) in h.iter().flatten() {
+                slope[i] += v * grad.dot(gp);
             }
         }
     }
-    let curvature: f64 = scratch.slope.iter().map(|d| d * d).sum();
+    let curvature: f64 = slope.iter().map(|d| d * d).sum();
     if !(squared > 0.0 && curvature > 0.0) {
         return;
     }
@@ -290,15 +317,19 @@ pub fn correct_spacing(
     let longest = constants.max_shift * step_grid.cell_size;
     let (min, max) = kept_box(grid, &walls.0);
     // 6. The shifts, clamped, kept inside the walls.
-    for ((_, points), g) in ordered.iter_mut().zip(&scratch.gradient) {
+    for (&(_, entity), g) in order.iter().zip(&*gradient) {
         if g.is_empty() {
             continue;
         }
+        let (_, _, mut points) = bodies.get_mut(entity).expect("a body just listed");
         points
             .position
             .par_iter_mut()
             .zip(g.par_iter())
             .for_each(|(x, &gp)| {
+                if gp == DVec2::ZERO {
+                    return;
+                }
                 let shift = -beta * gp;
                 let length = shift.length();
                 let shift = if length > longest {
