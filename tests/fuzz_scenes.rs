@@ -113,7 +113,7 @@ fn choose<'a>(valid: &[&'a str], invalid: &[&'a str], k: usize, faulty: bool) ->
 
 /// A small scene (a granular or elastic bed and a disc, 4 to 16 by 4 to 40 cells) assembled
 /// from items chosen by `k`: walls (periodic in x, in y, in both), cell counts, schemes,
-/// transfer, contact law, materials (`MuI`, `DruckerPrager`, `Nonlocal` with its grid field,
+/// transfer, the delta-correction, contact law, materials (`MuI`, `DruckerPrager`, `Nonlocal` with its grid field,
 /// elastic), initial stress, distinct outputs, a preset, and `--set` overrides
 /// (gravity along -y, none, upward or sideways where the initial stress allows it). One
 /// scene in four carries exactly one fault at a drawn site; the returned site is `None` for
@@ -160,6 +160,15 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
     let integration = pick(&["CpdiFixed", "Linear", "QuadraticBspline"], k[4]);
     let update = pick(&["Usl", "Musl"], k[5]);
     let dilatation = pick(&["CellAveraged", "PerPoint"], k[6]);
+    let spacing = pick(
+        &[
+            "",
+            "spacing: Off,",
+            "spacing: DeltaCorrection(),",
+            "spacing: DeltaCorrection(alpha: 0.5, max_shift: 0.25, refinement: 2, pull_above: 0.75),",
+        ],
+        k[6] / 2,
+    );
     let transfer = choose(
         &[
             "AffineFlip(relaxation: 25)",
@@ -261,6 +270,7 @@ fn semantic_scene(k: &[usize]) -> (String, Vec<String>, Option<usize>) {
     integration: {integration},
     update: {update},
     dilatation: {dilatation},
+    {spacing}
     transfer: {transfer},
     {flip}
     contact: {contact},
