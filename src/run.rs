@@ -364,12 +364,27 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
         point_bytes: 0,
         grid_bytes: 0,
     };
+    // The delta-correction's arrays: a place and a gradient per point, a fill and a slope
+    // per node of its grid (`refinement` times finer).
+    let (spacing_point, spacing_grid) = match scene.spacing {
+        crate::step::spacing::Spacing::Off => (0, 0),
+        crate::step::spacing::Spacing::DeltaCorrection(c) => {
+            let g = sim.grid();
+            let along = |a: usize| g.cells[a] * c.refinement + usize::from(!g.periodic[a]);
+            (
+                crate::step::spacing::BYTES_PER_POINT,
+                crate::step::spacing::BYTES_PER_NODE * along(0) * along(1),
+            )
+        }
+    };
+    estimate.grid_bytes += spacing_grid;
     for (spec, n) in scene.bodies.iter().zip(counts) {
         let normals = scene
             .contact
             .needs_normal_of(&spec.name, scene.bodies.len());
         estimate.points += n;
-        estimate.point_bytes += n * bytes_per_point(&*spec.material, scene.transfer.affine());
+        estimate.point_bytes +=
+            n * (bytes_per_point(&*spec.material, scene.transfer.affine()) + spacing_point);
         estimate.grid_bytes += nodes * GridField::bytes_per_node(normals) + averaging;
     }
     estimate

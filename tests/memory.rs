@@ -21,3 +21,19 @@ fn the_full_model_keeps_within_its_bytes_per_point() {
     );
     assert!(memory.grid_bytes > 0 && memory.total() > memory.point_bytes);
 }
+
+/// The delta-correction's arrays are counted: 40 bytes more per point (a place and a
+/// gradient), and a fill and a slope per node of its grid, four times as many nodes with
+/// `refinement: 2`.
+#[test]
+fn the_delta_correction_is_counted() {
+    let estimate = |sets: &[&str]| {
+        let scene = common::full_model_coarse_with(sets);
+        let mut sim = Simulation::new(&scene);
+        memory_estimate(&mut sim, &scene)
+    };
+    let off = estimate(&[]);
+    let on = estimate(&["spacing=DeltaCorrection(refinement: 2)"]);
+    assert_eq!(on.point_bytes - off.point_bytes, 40 * off.points);
+    assert_eq!(on.grid_bytes - off.grid_bytes, 16 * 81 * 81);
+}

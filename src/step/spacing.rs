@@ -151,8 +151,27 @@ impl TryFrom<SpacingParams> for Spacing {
     }
 }
 
-/// A point's four linear-hat nodes with their weights and gradients ([`hats`]).
-type Hats = Option<[(usize, f64, DVec2); 4]>;
+/// Where a point sits on the correction grid: its cell and its offsets in it (cells), found
+/// once a step; 24 bytes, from which [`hats`] rebuilds its four nodes, weights and gradients.
+#[derive(Clone, Copy, Debug, Default)]
+struct Place {
+    /// Column and row of the cell; `u32::MAX` for a point outside the grid (past a `Free`
+    /// side, about to stop the run).
+    cell: [u32; 2],
+    offset: [f64; 2],
+}
+
+impl Place {
+    const OUTSIDE: Place = Place {
+        cell: [u32::MAX; 2],
+        offset: [0.0; 2],
+    };
+}
+
+/// Bytes per point the correction keeps (its place and its gradient), for memory estimates.
+pub const BYTES_PER_POINT: usize = std::mem::size_of::<Place>() + std::mem::size_of::<DVec2>();
+/// Bytes per correction-grid node (its fill and its slope).
+pub const BYTES_PER_NODE: usize = 16;
 
 /// The correction's arrays, kept between steps so that a step allocates nothing.
 #[derive(Resource, Default)]
@@ -163,23 +182,35 @@ pub struct SpacingScratch {
     slope: Vec<f64>,
     /// The bodies in scene order (`Body::index`), so that the sums run in a fixed order.
     order: Vec<(usize, Entity)>,
-    /// Per body (in `order`), per point: its hats, found once a step.
-    hats: Vec<Vec<Hats>>,
+    /// Per body (in `order`), per point: its place, found once a step.
+    places: Vec<Vec<Place>>,
     /// Per body, per point: `g_p` (empty for a body whose points do not move).
     gradient: Vec<Vec<DVec2>>,
 }
 
-/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
-/// for a point outside the grid (past a `Free` side, about to stop the run).
-fn hats(grid: &GridGeometry, x: DVec2) -> Option<[(usize, f64, DVec2); 4]> {
-    let h = grid.cell_size;
-    let rel = (x - grid.origin) / h;
+/// The place of a point at `x` on `grid`.
+fn place(grid: &GridGeometry, x: DVec2) -> Place {
+    let rel = (x - grid.origin) / grid.cell_size;
     let inside = |a: usize| rel[a] >= 0.0 && rel[a] <= grid.cells[a] as f64;
     if !(inside(0) && inside(1)) {
+        return Place::OUTSIDE;
+    }
+    let [i, j] = grid.cell_at(x, 1.0 / grid.cell_size);
+    Place {
+        cell: [i as u32, j as u32],
+        offset: [rel.x - i as f64, rel.y - j as f64],
+    }
+}
+
+/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
+/// for a point outside the grid.
+fn hats(grid: &GridGeometry, place: &Place) -> Option<[(usize, f64, DVec2); 4]> {
+    if place.cell[0] == u32::MAX {
         return None;
     }
-    let [i, j] = grid.cell_at(x, 1.0 / h);
-    let (fx, fy) = (rel.x - i as f64, rel.y - j as f64);
+    let h = grid.cell_size;
+    let [i, j] = place.cell.map(|c| c as usize);
+    let [fx, fy] = place.offset;
     let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
     let (i1, j1) = ((i + 1) % nx, (j + 1) % ny);
     let node = |a: usize, b: usize| grid.index(a, b);
@@ -228,28 +259,28 @@ pub fn correct_spacing(
         fill,
         slope,
         order,
-        hats: all_hats,
+        places,
         gradient,
     } = &mut *scratch;
     order.clear();
     order.extend(bodies.iter().map(|(e, b, _)| (b.index, e)));
     order.sort_unstable();
-    all_hats.resize_with(order.len(), Vec::new);
+    places.resize_with(order.len(), Vec::new);
     gradient.resize_with(order.len(), Vec::new);
-    // 1. Each point's hats (in parallel), then Vpts over every body, serially in body and
+    // 1. Each point's place (in parallel), then Vpts over every body, serially in body and
     //    point order (deterministic sums).
     let nodes = grid.node_count();
     fill.clear();
     fill.resize(nodes, 0.0);
-    for (&(_, entity), hats_of) in order.iter().zip(all_hats.iter_mut()) {
+    for (&(_, entity), places_of) in order.iter().zip(places.iter_mut()) {
         let (_, _, points) = bodies.get(entity).expect("a body just listed");
         points
             .position
             .par_iter()
-            .map(|&x| hats(grid, x))
-            .collect_into_vec(hats_of);
-        for (h, &v) in hats_of.iter().zip(&points.volume) {
-            for &(i, w, _) in h.iter().flatten() {
+            .map(|&x| place(grid, x))
+            .collect_into_vec(places_of);
+        for (at, &v) in places_of.iter().zip(&points.volume) {
+            for (i, w, _) in hats(grid, at).into_iter().flatten() {
                 fill[i] += v * w;
             }
         }
@@ -275,17 +306,17 @@ pub fn correct_spacing(
     // 4. g_p for the points of the corrected bodies, in parallel (zero for a point none of
     //    whose nodes is over- or under-filled).
     let over = &*fill;
-    for ((&(_, entity), hats_of), g) in order.iter().zip(&*all_hats).zip(gradient.iter_mut()) {
+    for ((&(_, entity), places_of), g) in order.iter().zip(&*places).zip(gradient.iter_mut()) {
         g.clear();
         let (_, body, points) = bodies.get(entity).expect("a body just listed");
         if !body.granular {
             continue;
         }
-        hats_of
+        places_of
             .par_iter()
             .zip(points.volume.par_iter())
-            .map(|(h, &v)| {
-                h.map_or(DVec2::ZERO, |h| {
+            .map(|(at, &v)| {
+                hats(grid, at).map_or(DVec2::ZERO, |h| {
                     v * h
                         .iter()
                         .fold(DVec2::ZERO, |s, &(i, _, grad)| s + over[i] * grad)
@@ -297,14 +328,14 @@ pub fn correct_spacing(
     slope.clear();
     slope.resize(nodes, 0.0);
     let mut squared = 0.0;
-    for ((&(_, entity), hats_of), g) in order.iter().zip(&*all_hats).zip(&*gradient) {
+    for ((&(_, entity), places_of), g) in order.iter().zip(&*places).zip(&*gradient) {
         let (_, _, points) = bodies.get(entity).expect("a body just listed");
-        for ((h, &v), &gp) in hats_of.iter().zip(&points.volume).zip(g) {
+        for ((at, &v), &gp) in places_of.iter().zip(&points.volume).zip(g) {
             if gp == DVec2::ZERO {
                 continue;
             }
             squared += gp.length_squared();
-            for &(i, _, grad) in h.iter().flatten() {
+            for (i, _, grad) in hats(grid, at).into_iter().flatten() {
                 slope[i] += v * grad.dot(gp);
             }
         }
@@ -506,7 +537,7 @@ mod tests {
         let mut q = world.query::<&Points>();
         for p in q.iter(world) {
             for (&x, &v) in p.position.iter().zip(&p.volume) {
-                for (i, w, _) in hats(&grid, x).into_iter().flatten() {
+                for (i, w, _) in hats(&grid, &place(&grid, x)).into_iter().flatten() {
                     fill[i] += v * w;
                 }
             }
