@@ -4,14 +4,18 @@
 //! seconds against that profile (`verify::chute::run`, as lab/tests/dense_flow.rs).
 //!
 //! ```text
-//! cargo run --release -p regolith-lab --example dense_flow -- ANGLES CELLS_PER_DEPTH END [EVERY] [--set k=v]...
+//! cargo run --release -p regolith-lab --example dense_flow -- ANGLES CELLS_PER_DEPTH END [EVERY] [--seed AMPLITUDE,CELLS] [--set k=v]...
 //! cargo run --release -p regolith-lab --example dense_flow -- 20,25,28 10,20 25 1
 //! ```
 //! Prints one row per moment (top, volume ratio, disconnected fractions, mean speed,
-//! profile error, rms speed normal to the bed), the last at the end of the run; every run is at the default numerical settings
-//! unless `--set` says otherwise.
+//! profile error, rms speed normal to the bed, the box-length and grid-scale modes with the
+//! grid-scale one's growth rate since the last row, the spread of volume along a row), the
+//! last at the end of the run; every run is at the default numerical settings unless
+//! `--set` says otherwise. `--seed 1e-4,2` adds a normal-velocity disturbance of 1e-4 m/s
+//! and a wavelength of two cells to the start (`verify::chute::Disturbance`), so that a
+//! mode's growth or decay shows in a short run.
 
-use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, Steady, ps1, run};
+use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, Disturbance, Steady, ps1, run};
 
 fn list(arg: &str) -> Vec<f64> {
     arg.split(',')
@@ -35,20 +39,32 @@ fn main() {
         .filter(|w| w[0] == "--set")
         .map(|w| w[1].clone())
         .collect();
+    let disturbance = args.windows(2).find(|w| w[0] == "--seed").map(|w| {
+        let v = list(&w[1]);
+        Disturbance {
+            amplitude: v[0],
+            cells: v[1],
+        }
+    });
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     let material = ps1();
     println!(
-        "| angle | cells/depth | t (s) | top/H | sum V / area | most in a cell | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | wall (s) |"
+        "| angle | cells/depth | t (s) | top/H | sum V / area | most in a cell | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | box mode (m/s) | grid-scale mode (m/s) [cells] | its rate (1/s) | V spread along a row | wall (s) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for &deg in &angles {
         for &per_depth in &resolutions {
             let profile = Bagnold::new(&material, deg.to_radians(), DEPTH, 9.81);
             let analytic = profile.as_ref().map_or(f64::NAN, |b| b.mean_speed());
             let started = std::time::Instant::now();
+            let mut last: Option<(f64, f64)> = None;
             let row = |t: f64, m: &ChuteState| {
+                let rate = last.map_or("-".into(), |(t0, a0): (f64, f64)| {
+                    format!("{:.2}", (m.modes.grid_scale / a0).ln() / (t - t0))
+                });
+                last = Some((t, m.modes.grid_scale));
                 println!(
-                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.1e} | {:.0} |",
+                    "| {deg} | {per_depth} | {t:.2} | {:.4} | {:.5} | {} | {:.3} ({:.3}) | {:.3} ({analytic:.3}) | {} | {:.4} | {:.1e} | {:.1e} | {:.1e} [{:.2}] | {rate} | {:.1e} | {:.0} |",
                     m.top / DEPTH,
                     m.volume_ratio,
                     m.most_in_a_cell,
@@ -58,6 +74,10 @@ fn main() {
                     m.profile_error.map_or("-".into(), |e| format!("{e:.3}")),
                     m.speed_95,
                     m.normal_rms,
+                    m.modes.box_length,
+                    m.modes.grid_scale,
+                    m.modes.grid_scale_cells,
+                    m.modes.volume_spread,
                     started.elapsed().as_secs_f64()
                 );
             };
@@ -68,6 +88,7 @@ fn main() {
                 end,
                 &sets,
                 profile.as_ref().map(|b| b as &dyn Steady),
+                disturbance,
                 every,
                 row,
             );

@@ -15,7 +15,7 @@
 //! which transfer holds a dense flow, and the issue stays open.
 
 use regolith_lab::verify::chute::{
-    Bagnold, ChuteState, DEPTH, Steady, least_acceleration, ps1, run,
+    Bagnold, ChuteState, DEPTH, Disturbance, Steady, least_acceleration, ps1, run,
 };
 
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth) and APIC, run
@@ -35,6 +35,7 @@ fn run_chute(
         end,
         &["transfer=Apic".to_string()],
         profile,
+        None,
         0.25,
         each,
     )
@@ -115,4 +116,66 @@ fn above_the_dynamic_friction_angle_the_layer_accelerates() {
             w[1].0
         );
     }
+}
+
+/// The grid-modes issue's measure: a periodic layer four cells long (it admits a wavelength
+/// of two cells) at 25 degrees, started in its steady state with a normal-velocity
+/// disturbance of 1e-4 m/s and a wavelength of two cells, run for 2 s with the transfer
+/// `transfer`; returns the grid-scale amplitude at the start, at 1 s and at 2 s.
+fn seeded_two_cell_mode(transfer: &str) -> [f64; 3] {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
+    let profile = Bagnold::new(&ps1(), 25f64.to_radians(), DEPTH, 9.81).unwrap();
+    let sets = [
+        format!("transfer={transfer}"),
+        "domain.size=(0.04, 0.15)".into(),
+        "domain.cells=(4, 15)".into(),
+        "bodies.layer.shape=Rectangle(min: (0.0, 0.0), max: (0.04, 0.1))".into(),
+    ];
+    let seed = Disturbance {
+        amplitude: 1e-4,
+        cells: 2.0,
+    };
+    let mut amplitudes = Vec::new();
+    run(
+        &path,
+        25.0,
+        10,
+        2.0,
+        &sets,
+        Some(&profile),
+        Some(seed),
+        1.0,
+        |_, m| {
+            assert_eq!(m.modes.grid_scale_cells, 2.0);
+            amplitudes.push(m.modes.grid_scale);
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    amplitudes.try_into().expect("measured at 0, 1 and 2 s")
+}
+
+/// With APIC the seeded two-cell mode is gone within a step's projection and stays gone:
+/// the measure sees a decay (7e-5 m/s to 1e-16), so the test below can pass.
+#[test]
+fn apic_removes_a_seeded_two_cell_mode() {
+    let [start, one, two] = seeded_two_cell_mode("Apic");
+    assert!(start > 5e-5, "seeded amplitude {start:.1e} m/s");
+    assert!(
+        one < 1e-3 * start && two < 1e-3 * start,
+        "two-cell mode {start:.1e} -> {one:.1e} -> {two:.1e} m/s"
+    );
+}
+
+/// The grid-modes issue's acceptance test: at the default transfer a seeded two-cell mode
+/// must decay. It does not yet: after a fast initial decay it grows at 4-13 per second
+/// (7.1e-5 m/s at the start, 1.1e-5 at 1 s, 3.4e-4 at 2 s; docs/numerics.md, "A measure of
+/// the modes"). `cargo test --release -p regolith-lab --test dense_flow -- --ignored`.
+#[test]
+#[ignore = "issue 60: the default transfer lets the two-cell mode grow"]
+fn the_default_transfer_damps_a_seeded_two_cell_mode() {
+    let [start, one, two] = seeded_two_cell_mode("AffineFlip(relaxation: 25)");
+    assert!(
+        two < 0.1 * start && two < one,
+        "two-cell mode {start:.1e} -> {one:.1e} -> {two:.1e} m/s"
+    );
 }

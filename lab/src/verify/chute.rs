@@ -168,6 +168,110 @@ pub struct ChuteState {
     /// The most points in one grid cell (the layer starts with `points_per_cell^2`): how far
     /// the points have crowded together (docs/numerics.md, "Points that keep their spacing").
     pub most_in_a_cell: usize,
+    /// The normal-velocity modes along the slope (the grid-modes issue).
+    pub modes: Modes,
+}
+
+/// The disturbance of a steady layer split by wavelength along the slope: a steady layer
+/// moves parallel to its bed and is uniform along it, so every one of these is zero in the
+/// steady state and grows or decays with a disturbance (docs/numerics.md, "What breaks the
+/// chute").
+///
+/// Points are grouped into rows one lattice spacing high; in each row the speed normal to
+/// the bed is written as a Fourier series along the slope, `v_y = sum_n a_n cos(2 pi n x /
+/// W) + b_n sin(..)`, over the wavelengths `W / n` the periodic box admits down to two point
+/// spacings. A mode's amplitude is the rms over the rows of `sqrt(a_n^2 + b_n^2)`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Modes {
+    /// Amplitude of the longest mode, one box length (m/s).
+    pub box_length: f64,
+    /// The largest amplitude among the modes of at most 2.5 cells (m/s): the grid-scale
+    /// modes, which a continuum has no reason to prefer.
+    pub grid_scale: f64,
+    /// That mode's wavelength, in cells.
+    pub grid_scale_cells: f64,
+    /// The largest spread of point volume along a row below the surface cells, `(max -
+    /// min) / mean`: a layer in 1D flow keeps every row's points at one `det F` (1e-13).
+    pub volume_spread: f64,
+}
+
+impl Modes {
+    /// The modes of `points` in a periodic box of width `width` on cells of size `cell`,
+    /// below `top`.
+    pub fn measure(points: &Points, width: f64, cell: f64, top: f64) -> Modes {
+        let spacing = 2.0 * points.half_width[0];
+        let rows = (top / spacing).ceil().max(1.0) as usize;
+        let mut by_row: Vec<Vec<usize>> = vec![Vec::new(); rows];
+        for (k, x) in points.position.iter().enumerate() {
+            let r = ((x.y / spacing).floor().max(0.0) as usize).min(rows - 1);
+            by_row[r].push(k);
+        }
+        let by_row: Vec<&Vec<usize>> = by_row.iter().filter(|r| !r.is_empty()).collect();
+        let highest = (width / (2.0 * spacing)).floor().max(1.0) as usize;
+        let amplitude = |n: usize| -> f64 {
+            let k = std::f64::consts::TAU * n as f64 / width;
+            let ms = by_row
+                .iter()
+                .map(|row| {
+                    let (mut a, mut b) = (0.0, 0.0);
+                    for &p in row.iter() {
+                        let (s, c) = (k * points.position[p].x).sin_cos();
+                        a += points.velocity[p].y * c;
+                        b += points.velocity[p].y * s;
+                    }
+                    (a * a + b * b) * (2.0 / row.len() as f64).powi(2)
+                })
+                .sum::<f64>()
+                / by_row.len() as f64;
+            ms.sqrt()
+        };
+        let (mut grid_scale, mut grid_scale_cells) = (0.0, 0.0);
+        for n in 1..=highest {
+            let cells = width / n as f64 / cell;
+            let a = amplitude(n);
+            if cells <= 2.5 + 1e-9 && a >= grid_scale {
+                (grid_scale, grid_scale_cells) = (a, cells);
+            }
+        }
+        let volume_spread = by_row
+            .iter()
+            .filter(|row| row.iter().all(|&p| points.position[p].y < top - cell))
+            .map(|row| {
+                let v = row.iter().map(|&p| points.volume[p]);
+                let (lo, hi) = v
+                    .clone()
+                    .fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x), h.max(x)));
+                (hi - lo) * row.len() as f64 / v.sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+        Modes {
+            box_length: amplitude(1),
+            grid_scale,
+            grid_scale_cells,
+            volume_spread,
+        }
+    }
+}
+
+/// A seeded disturbance: the normal velocity `amplitude sin(2 pi x / (wavelength h)) sin(pi
+/// y / 2 H)`, zero on the rough base, largest at the top, added to a layer at its start.
+#[derive(Clone, Copy, Debug)]
+pub struct Disturbance {
+    /// Peak normal speed (m/s).
+    pub amplitude: f64,
+    /// Wavelength along the slope, in cells.
+    pub cells: f64,
+}
+
+impl Disturbance {
+    /// Adds the disturbance to the points of a layer of depth `depth` on cells of `cell`.
+    pub fn seed(&self, points: &mut Points, cell: f64, depth: f64) {
+        let k = std::f64::consts::TAU / (self.cells * cell);
+        for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
+            let across = (0.5 * std::f64::consts::PI * x.y / depth).sin();
+            v.y += self.amplitude * (k * x.x).sin() * across;
+        }
+    }
 }
 
 /// Measures a chute layer of width `width` on a grid of cell size `cell`; `profile` is the
@@ -223,6 +327,7 @@ pub fn measure(
             .or_insert(0usize) += 1;
     }
     ChuteState {
+        modes: Modes::measure(points, width, cell, top),
         most_in_a_cell: per_cell.values().copied().max().unwrap_or(0),
         top,
         volume_ratio: volume / (width * top),
@@ -243,8 +348,9 @@ pub fn measure(
 /// `cells_per_depth` cells across the layer (even: the domain is half as wide as the
 /// layer is deep), to `end` seconds, with further `--set` overrides `sets`. The layer starts
 /// in its lithostatic state moving with `profile` (`start_steady`), and is measured against
-/// it at t = 0, every `every` seconds and at the end (`each(t, state)`, once each). Returns
-/// the steps taken; a scene error or a fault of the run is the error.
+/// it at t = 0, every `every` seconds and at the end (`each(t, state)`, once each); a
+/// `disturbance` is seeded on top of the start. Returns the steps taken; a scene error or a
+/// fault of the run is the error.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     path: &Path,
@@ -253,6 +359,7 @@ pub fn run(
     end: f64,
     sets: &[String],
     profile: Option<&dyn Steady>,
+    disturbance: Option<Disturbance>,
     every: f64,
     mut each: impl FnMut(f64, &ChuteState),
 ) -> Result<u64, String> {
@@ -285,6 +392,9 @@ pub fn run(
         .points_mut(&body)
         .ok_or_else(|| format!("{}: no body to run", path.display()))?;
     start_steady(&mut points, &material, gravity, DEPTH, profile);
+    if let Some(d) = disturbance {
+        d.seed(&mut points, cell, DEPTH);
+    }
     let state = |sim: &mut Simulation| {
         let mut q = sim.world.query::<(&Points, &PointStates)>();
         let (p, s) = q.single(&sim.world).expect("the chute scene has one body");
@@ -345,5 +455,49 @@ mod tests {
         }
         assert!(Bagnold::new(&m, 15f64.to_radians(), 0.1, 9.81).is_none());
         assert!(Bagnold::new(&m, 35f64.to_radians(), 0.1, 9.81).is_none());
+    }
+
+    /// A lattice of 2 x 2 points per 10 mm cell in a box 4 cells long, given the seeded
+    /// disturbance plus a box-length mode of 3e-5 m/s: the measure finds each amplitude
+    /// (the seeded one is `A sin(pi y / 2H)` in each row, whose rms over the rows it
+    /// returns) and the two-cell wavelength, and a volume spread of 1% in one row.
+    #[test]
+    fn the_modes_are_found_by_wavelength() {
+        let (cell, width, depth) = (0.01, 0.04, 0.1);
+        let mut points = Points::default();
+        for j in 0..20 {
+            for i in 0..8 {
+                points
+                    .position
+                    .push(DVec2::new((i as f64 + 0.5) * 0.005, (j as f64 + 0.5) * 0.005));
+                points.velocity.push(DVec2::ZERO);
+                points.volume.push(2.5e-5);
+                points.half_width.push(0.0025);
+            }
+        }
+        let seed = Disturbance {
+            amplitude: 1e-4,
+            cells: 2.0,
+        };
+        seed.seed(&mut points, cell, depth);
+        for (x, v) in points.position.iter().zip(points.velocity.iter_mut()) {
+            v.y += 3e-5 * (std::f64::consts::TAU * x.x / width).cos();
+        }
+        points.volume[8 * 5 + 3] *= 1.01;
+        let m = Modes::measure(&points, width, cell, depth);
+        let rows: Vec<f64> = (0..20)
+            .map(|j| (0.5 * std::f64::consts::PI * (j as f64 + 0.5) * 0.005 / depth).sin())
+            .collect();
+        let rms = (rows.iter().map(|s| s * s).sum::<f64>() / 20.0).sqrt();
+        assert_eq!(m.grid_scale_cells, 2.0);
+        assert!(
+            (m.grid_scale - 1e-4 * rms).abs() < 1e-12,
+            "{} against {}",
+            m.grid_scale,
+            1e-4 * rms
+        );
+        assert!((m.box_length - 3e-5).abs() < 1e-12, "{}", m.box_length);
+        let spread = 0.01 * 8.0 / 8.01;
+        assert!((m.volume_spread - spread).abs() < 1e-12, "{}", m.volume_spread);
     }
 }
