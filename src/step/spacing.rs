@@ -202,28 +202,53 @@ fn place(grid: &GridGeometry, x: DVec2) -> Place {
     }
 }
 
-/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
-/// for a point outside the grid.
-fn hats(grid: &GridGeometry, place: &Place) -> Option<[(usize, f64, DVec2); 4]> {
+/// A point's four linear-hat nodes (flat indices) and weights, and its offsets in its cell,
+/// or `None` for a point outside the grid. The fill needs no more; [`hats`] adds gradients.
+#[inline]
+fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4], [f64; 2])> {
     if place.cell[0] == u32::MAX {
         return None;
     }
-    let h = grid.cell_size;
     let [i, j] = place.cell.map(|c| c as usize);
     let [fx, fy] = place.offset;
     let (nx, ny) = (grid.nodes_along(0), grid.nodes_along(1));
     let (i1, j1) = ((i + 1) % nx, (j + 1) % ny);
     let node = |a: usize, b: usize| grid.index(a, b);
-    Some([
-        (
-            node(i, j),
+    Some((
+        [node(i, j), node(i1, j), node(i, j1), node(i1, j1)],
+        [
             (1.0 - fx) * (1.0 - fy),
-            DVec2::new(-(1.0 - fy), -(1.0 - fx)) / h,
-        ),
-        (node(i1, j), fx * (1.0 - fy), DVec2::new(1.0 - fy, -fx) / h),
-        (node(i, j1), (1.0 - fx) * fy, DVec2::new(-fy, 1.0 - fx) / h),
-        (node(i1, j1), fx * fy, DVec2::new(fy, fx) / h),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
+        ],
+        place.offset,
+    ))
+}
+
+/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
+/// for a point outside the grid.
+fn hats(grid: &GridGeometry, place: &Place) -> Option<[(usize, f64, DVec2); 4]> {
+    let (n, w, offset) = corners(grid, place)?;
+    let g = gradients(grid, offset);
+    Some([
+        (n[0], w[0], g[0]),
+        (n[1], w[1], g[1]),
+        (n[2], w[2], g[2]),
+        (n[3], w[3], g[3]),
     ])
+}
+
+/// The gradients of the four hats of [`corners`] at offsets `[fx, fy]` in a cell.
+#[inline]
+fn gradients(grid: &GridGeometry, [fx, fy]: [f64; 2]) -> [DVec2; 4] {
+    let h = grid.cell_size;
+    [
+        DVec2::new(-(1.0 - fy), -(1.0 - fx)) / h,
+        DVec2::new(1.0 - fy, -fx) / h,
+        DVec2::new(-fy, 1.0 - fx) / h,
+        DVec2::new(fy, fx) / h,
+    ]
 }
 
 /// `Vref_i` of node `(i, j)`: the integral of its hat over the domain.
@@ -280,8 +305,10 @@ pub fn correct_spacing(
             .map(|&x| place(grid, x))
             .collect_into_vec(places_of);
         for (at, &v) in places_of.iter().zip(&points.volume) {
-            for (i, w, _) in hats(grid, at).into_iter().flatten() {
-                fill[i] += v * w;
+            if let Some((n, w, _)) = corners(grid, at) {
+                for k in 0..4 {
+                    fill[n[k]] += v * w[k];
+                }
             }
         }
     }
@@ -316,11 +343,14 @@ pub fn correct_spacing(
             .par_iter()
             .zip(points.volume.par_iter())
             .map(|(at, &v)| {
-                hats(grid, at).map_or(DVec2::ZERO, |h| {
-                    v * h
-                        .iter()
-                        .fold(DVec2::ZERO, |s, &(i, _, grad)| s + over[i] * grad)
-                })
+                let Some((n, _, offset)) = corners(grid, at) else {
+                    return DVec2::ZERO;
+                };
+                if n.iter().all(|&i| over[i] == 0.0) {
+                    return DVec2::ZERO;
+                }
+                let grads = gradients(grid, offset);
+                v * (0..4).fold(DVec2::ZERO, |s, k| s + over[n[k]] * grads[k])
             })
             .collect_into_vec(g);
     }

@@ -467,9 +467,10 @@ mod tests {
         let mut points = Points::default();
         for j in 0..20 {
             for i in 0..8 {
-                points
-                    .position
-                    .push(DVec2::new((i as f64 + 0.5) * 0.005, (j as f64 + 0.5) * 0.005));
+                points.position.push(DVec2::new(
+                    (i as f64 + 0.5) * 0.005,
+                    (j as f64 + 0.5) * 0.005,
+                ));
                 points.velocity.push(DVec2::ZERO);
                 points.volume.push(2.5e-5);
                 points.half_width.push(0.0025);
@@ -498,6 +499,10 @@ mod tests {
         );
         assert!((m.box_length - 3e-5).abs() < 1e-12, "{}", m.box_length);
         let spread = 0.01 * 8.0 / 8.01;
-        assert!((m.volume_spread - spread).abs() < 1e-12, "{}", m.volume_spread);
+        assert!(
+            (m.volume_spread - spread).abs() < 1e-12,
+            "{}",
+            m.volume_spread
+        );
     }
 }
