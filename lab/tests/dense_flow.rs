@@ -18,6 +18,11 @@ use regolith_lab::verify::chute::{
     Bagnold, ChuteState, DEPTH, Disturbance, Steady, least_acceleration, ps1, run,
 };
 
+/// The shipped chute scene, `scenes/chute_flow.ron`.
+fn chute_scene() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron")
+}
+
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth) and APIC, run
 /// for `end` seconds from the lithostatic state, moving with `profile` if given; `each`
 /// sees the measures at t = 0, every 0.25 s and at the end. Returns the steps.
@@ -27,9 +32,8 @@ fn run_chute(
     profile: Option<&dyn Steady>,
     each: impl FnMut(f64, &ChuteState),
 ) -> u64 {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     run(
-        &path,
+        &chute_scene(),
         deg,
         10,
         end,
@@ -123,7 +127,6 @@ fn above_the_dynamic_friction_angle_the_layer_accelerates() {
 /// disturbance of 1e-4 m/s and a wavelength of two cells, run for 2 s with the transfer
 /// `transfer`; returns the grid-scale amplitude at the start, at 1 s and at 2 s.
 fn seeded_two_cell_mode(transfer: &str) -> [f64; 3] {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
     let profile = Bagnold::new(&ps1(), 25f64.to_radians(), DEPTH, 9.81).unwrap();
     let sets = [
         format!("transfer={transfer}"),
@@ -137,7 +140,7 @@ fn seeded_two_cell_mode(transfer: &str) -> [f64; 3] {
     };
     let mut amplitudes = Vec::new();
     run(
-        &path,
+        &chute_scene(),
         25.0,
         10,
         2.0,

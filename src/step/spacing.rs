@@ -152,7 +152,8 @@ impl TryFrom<SpacingParams> for Spacing {
 }
 
 /// Where a point sits on the correction grid: its cell and its offsets in it (cells), found
-/// once a step; 24 bytes, from which [`hats`] rebuilds its four nodes, weights and gradients.
+/// once a step; 24 bytes, from which [`corners`] and [`gradients`] rebuild its four nodes,
+/// weights and gradients.
 #[derive(Clone, Copy, Debug, Default)]
 struct Place {
     /// Column and row of the cell; `u32::MAX` for a point outside the grid (past a `Free`
@@ -203,7 +204,8 @@ fn place(grid: &GridGeometry, x: DVec2) -> Place {
 }
 
 /// A point's four linear-hat nodes (flat indices) and weights, and its offsets in its cell,
-/// or `None` for a point outside the grid. The fill needs no more; [`hats`] adds gradients.
+/// or `None` for a point outside the grid. The fill needs no more; [`gradients`] gives the
+/// slopes where they are needed.
 #[inline]
 fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4], [f64; 2])> {
     if place.cell[0] == u32::MAX {
@@ -224,19 +226,6 @@ fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4], 
         ],
         place.offset,
     ))
-}
-
-/// A point's four linear-hat nodes (flat indices) with their weights and gradients, or `None`
-/// for a point outside the grid.
-fn hats(grid: &GridGeometry, place: &Place) -> Option<[(usize, f64, DVec2); 4]> {
-    let (n, w, offset) = corners(grid, place)?;
-    let g = gradients(grid, offset);
-    Some([
-        (n[0], w[0], g[0]),
-        (n[1], w[1], g[1]),
-        (n[2], w[2], g[2]),
-        (n[3], w[3], g[3]),
-    ])
 }
 
 /// The gradients of the four hats of [`corners`] at offsets `[fx, fy]` in a cell.
@@ -365,8 +354,10 @@ pub fn correct_spacing(
                 continue;
             }
             squared += gp.length_squared();
-            for (i, _, grad) in hats(grid, at).into_iter().flatten() {
-                slope[i] += v * grad.dot(gp);
+            if let Some((n, _, offset)) = corners(grid, at) {
+                for (i, grad) in n.into_iter().zip(gradients(grid, offset)) {
+                    slope[i] += v * grad.dot(gp);
+                }
             }
         }
     }
@@ -567,8 +558,10 @@ mod tests {
         let mut q = world.query::<&Points>();
         for p in q.iter(world) {
             for (&x, &v) in p.position.iter().zip(&p.volume) {
-                for (i, w, _) in hats(&grid, &place(&grid, x)).into_iter().flatten() {
-                    fill[i] += v * w;
+                if let Some((n, w, _)) = corners(&grid, &place(&grid, x)) {
+                    for (i, w) in n.into_iter().zip(w) {
+                        fill[i] += v * w;
+                    }
                 }
             }
         }

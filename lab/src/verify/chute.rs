@@ -225,10 +225,10 @@ impl Modes {
                 / by_row.len() as f64;
             ms.sqrt()
         };
+        let amplitudes: Vec<f64> = (1..=highest).map(amplitude).collect();
         let (mut grid_scale, mut grid_scale_cells) = (0.0, 0.0);
-        for n in 1..=highest {
+        for (n, &a) in (1..=highest).zip(&amplitudes) {
             let cells = width / n as f64 / cell;
-            let a = amplitude(n);
             if cells <= 2.5 + 1e-9 && a >= grid_scale {
                 (grid_scale, grid_scale_cells) = (a, cells);
             }
@@ -245,7 +245,7 @@ impl Modes {
             })
             .fold(0.0, f64::max);
         Modes {
-            box_length: amplitude(1),
+            box_length: amplitudes[0],
             grid_scale,
             grid_scale_cells,
             volume_spread,
