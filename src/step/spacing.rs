@@ -203,11 +203,11 @@ fn place(grid: &GridGeometry, x: DVec2) -> Place {
     }
 }
 
-/// A point's four linear-hat nodes (flat indices) and weights, and its offsets in its cell,
-/// or `None` for a point outside the grid. The fill needs no more; [`gradients`] gives the
-/// slopes where they are needed.
+/// A point's four linear-hat nodes (flat indices) and weights, or `None` for a point outside
+/// the grid. The fill needs no more; [`gradients`] gives the slopes, from the place's
+/// offsets, where they are needed.
 #[inline]
-fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4], [f64; 2])> {
+fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4])> {
     if place.cell[0] == u32::MAX {
         return None;
     }
@@ -224,7 +224,6 @@ fn corners(grid: &GridGeometry, place: &Place) -> Option<([usize; 4], [f64; 4], 
             (1.0 - fx) * fy,
             fx * fy,
         ],
-        place.offset,
     ))
 }
 
@@ -294,7 +293,7 @@ pub fn correct_spacing(
             .map(|&x| place(grid, x))
             .collect_into_vec(places_of);
         for (at, &v) in places_of.iter().zip(&points.volume) {
-            if let Some((n, w, _)) = corners(grid, at) {
+            if let Some((n, w)) = corners(grid, at) {
                 for k in 0..4 {
                     fill[n[k]] += v * w[k];
                 }
@@ -332,13 +331,13 @@ pub fn correct_spacing(
             .par_iter()
             .zip(points.volume.par_iter())
             .map(|(at, &v)| {
-                let Some((n, _, offset)) = corners(grid, at) else {
+                let Some((n, _)) = corners(grid, at) else {
                     return DVec2::ZERO;
                 };
                 if n.iter().all(|&i| over[i] == 0.0) {
                     return DVec2::ZERO;
                 }
-                let grads = gradients(grid, offset);
+                let grads = gradients(grid, at.offset);
                 v * (0..4).fold(DVec2::ZERO, |s, k| s + over[n[k]] * grads[k])
             })
             .collect_into_vec(g);
@@ -354,8 +353,8 @@ pub fn correct_spacing(
                 continue;
             }
             squared += gp.length_squared();
-            if let Some((n, _, offset)) = corners(grid, at) {
-                for (i, grad) in n.into_iter().zip(gradients(grid, offset)) {
+            if let Some((n, _)) = corners(grid, at) {
+                for (i, grad) in n.into_iter().zip(gradients(grid, at.offset)) {
                     slope[i] += v * grad.dot(gp);
                 }
             }
@@ -558,7 +557,7 @@ mod tests {
         let mut q = world.query::<&Points>();
         for p in q.iter(world) {
             for (&x, &v) in p.position.iter().zip(&p.volume) {
-                if let Some((n, w, _)) = corners(&grid, &place(&grid, x)) {
+                if let Some((n, w)) = corners(&grid, &place(&grid, x)) {
                     for (i, w) in n.into_iter().zip(w) {
                         fill[i] += v * w;
                     }
