@@ -3,7 +3,12 @@
 //! Only scenes with two or more bodies get a contact system. Two laws:
 //!
 //! * `NoSlip`, the classic MPM default: at every node where two or more bodies have mass all
-//!   of them take the nodes' common centre-of-mass velocity.
+//!   of them take the nodes' common centre-of-mass velocity, and the acceleration their points
+//!   see (FLIP) is the node's total force over its total mass: what one body made of all of
+//!   them would see, so that a seam between bodies of one material is invisible. (Each body's
+//!   own velocity change, the impulse included, would remove its points' velocity relative to
+//!   the common one at every step: a damping at the seam that one body does not have, which
+//!   made the authors' impact 15% shallower; docs/VALIDATION.md, "Against the authors' code".)
 //! * `Frictional(friction: mu)`: Bardenhagen et al. (2001) as refined by Huang et al. (2011),
 //!   run once per step before the stress update (update-stress-last form, docs/model.md §5).
 //!   At a shared node each body is compared with the centre of mass of all bodies there:
@@ -13,8 +18,9 @@
 //!   `|dp_t| <= mu |dp_n|`. Separating bodies feel nothing: no glue, no tension. For two
 //!   bodies the normals are opposite and the two momentum changes cancel exactly.
 //!
-//! Both are written as a force added to each body's nodal force, so the FLIP update sees
-//! them. The contact switches on as soon as two bodies share a node, up to about one cell
+//! Both are written as a force added to each body's nodal force; the frictional impulse also
+//! enters the acceleration the FLIP update reads (no-slip's does not, above). The contact
+//! switches on as soon as two bodies share a node, up to about one cell
 //! before their points touch.
 
 use bevy_ecs::prelude::*;
@@ -191,9 +197,10 @@ pub struct ContactScratch {
     sharing: Vec<u8>,
     /// The nodes two or more bodies share: the only ones either law acts on.
     shared: Vec<usize>,
-    /// Per shared node: total mass and momentum (no-slip law).
+    /// Per shared node: total mass, momentum and force (no-slip law).
     mass: Vec<f64>,
     momentum: Vec<DVec2>,
+    force: Vec<DVec2>,
     /// Per body and shared node (`body * shared + k`): the state read and the impulse to
     /// apply.
     state: Vec<NodeBody>,
@@ -243,11 +250,15 @@ pub fn no_slip(
     s.momentum.clear();
     s.momentum.reserve(nodes);
     s.momentum.resize(s.shared.len(), DVec2::ZERO);
+    s.force.clear();
+    s.force.reserve(nodes);
+    s.force.resize(s.shared.len(), DVec2::ZERO);
     for f in fields.iter() {
         for (k, &n) in s.shared.iter().enumerate() {
             if f.mass[n] > f.mass_tolerance {
                 s.mass[k] += f.mass[n];
                 s.momentum[k] += f.momentum[n];
+                s.force[k] += f.force[n];
             }
         }
     }
@@ -257,6 +268,7 @@ pub fn no_slip(
                 let v_cm = s.momentum[k] / s.mass[k];
                 let impulse = f.mass[n] * v_cm - f.momentum[n];
                 apply_impulse(&mut f, n, impulse, dt);
+                f.acceleration[n] = s.force[k] / s.mass[k];
             }
         }
     }
