@@ -77,7 +77,7 @@ pub struct OutputClock {
 pub struct Gravity(pub DVec2);
 
 /// The walls of the domain.
-#[derive(Resource, Clone, Copy, Debug)]
+#[derive(Resource, Clone, Debug)]
 pub struct Boundaries(pub Walls);
 
 /// How the points' velocities follow the grid: the scene's transfer and its FLIP fraction.
@@ -116,14 +116,83 @@ impl TimeStep {
     }
 }
 
-/// The four sides of the domain.
-#[derive(Clone, Copy, Debug, Deserialize)]
+/// The four sides of the domain, each one condition from end to end except where a segment
+/// gives a stretch of it another (a silo's orifice: `segments: [(side: Bottom, from: 0.45,
+/// to: 0.55, wall: Open)]`).
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Walls {
     pub left: Wall,
     pub right: Wall,
     pub bottom: Wall,
     pub top: Wall,
+    #[serde(default)]
+    pub segments: Vec<Segment>,
+}
+
+/// One side of the domain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub enum Side {
+    Left,
+    Right,
+    Bottom,
+    Top,
+}
+
+impl Side {
+    /// The sides in the order the walls are applied, with the axis of their normal and
+    /// whether they are its low end.
+    pub const ALL: [(Side, usize, bool); 4] = [
+        (Side::Left, 0, true),
+        (Side::Right, 0, false),
+        (Side::Bottom, 1, true),
+        (Side::Top, 1, false),
+    ];
+
+    /// The side at the low (`high = false`) or high end of `axis`.
+    pub fn of(axis: usize, high: bool) -> Side {
+        match (axis, high) {
+            (0, false) => Side::Left,
+            (0, true) => Side::Right,
+            (_, false) => Side::Bottom,
+            (_, true) => Side::Top,
+        }
+    }
+}
+
+/// A stretch of a side, from `from` to `to` along it (m: x on the bottom and top, y on the
+/// left and right), with its own condition. A grid node belongs to it when strictly inside,
+/// so the nodes at its ends keep the side's condition; a point leaving through the side
+/// between `from` and `to` meets the segment's.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Segment {
+    pub side: Side,
+    pub from: f64,
+    pub to: f64,
+    pub wall: Wall,
+}
+
+impl Walls {
+    /// The condition of a whole side (its segments aside).
+    pub fn side(&self, side: Side) -> Wall {
+        match side {
+            Side::Left => self.left,
+            Side::Right => self.right,
+            Side::Bottom => self.bottom,
+            Side::Top => self.top,
+        }
+    }
+
+    /// The condition on `side` at `along` (x on the bottom and top, y on the left and
+    /// right): the segment's strictly inside one, the side's elsewhere.
+    #[inline]
+    pub fn at(&self, side: Side, along: f64) -> Wall {
+        self.segments
+            .iter()
+            .find(|s| s.side == side && s.from < along && along < s.to)
+            .map_or(self.side(side), |s| s.wall)
+    }
 }
 
 /// Boundary condition on one side.

@@ -218,7 +218,7 @@ impl Simulation {
             bound: scene.limits.max_kinetic_energy,
         });
         world.insert_resource(Gravity(scene.gravity));
-        world.insert_resource(Boundaries(scene.walls));
+        world.insert_resource(Boundaries(scene.walls.clone()));
         if let Spacing::DeltaCorrection(constants) = scene.spacing {
             world.insert_resource(constants);
             world.insert_resource(SpacingScratch::default());

@@ -122,6 +122,37 @@ fn bad_scenes_give_their_messages() {
             "Sticky",
             Some(6),
         ),
+        // Wall segments (issue 40): each refused at the `segments` line.
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free,\n        segments: [(side: Bottom, from: 0.6, to: 0.4, wall: Open)]),",
+            "a segment needs from < to (m), got from 0.6 to 0.4",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free,\n        segments: [(side: Left, from: 0.5, to: 1.2, wall: Open)]),",
+            "a segment of the Left side must lie along it, within [0, 1] m; got [0.5, 1.2]",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free,\n        segments: [(side: Bottom, from: 0.2, to: 0.5, wall: Open), (side: Bottom, from: 0.4, to: 0.6, wall: Slip)]),",
+            "segments of the Bottom side overlap",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Periodic, right: Periodic, bottom: NoSlip, top: Free,\n        segments: [(side: Left, from: 0.2, to: 0.5, wall: Open)]),",
+            "a periodic side cannot have segments",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free,\n        segments: [(sied: Bottom, from: 0.2, to: 0.5, wall: Open)]),",
+            "Unexpected field named `sied`",
+            Some(7),
+        ),
         (
             11,
             "            material: LinearElastic(density: 1000.0, youngs_modulus: 1e6, poisson_ratio: 0.5),",

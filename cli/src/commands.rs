@@ -353,7 +353,7 @@ pub(crate) fn check(
     if !scene.description.is_empty() {
         println!("  {}", scene.description);
     }
-    let w = scene.walls;
+    let w = &scene.walls;
     println!(
         "domain: {} x {} m from ({}, {}), {} x {} cells of {} m, {} nodes per body field",
         scene.domain.size.x,
@@ -369,6 +369,12 @@ pub(crate) fn check(
         "walls: left {:?}, right {:?}, bottom {:?}, top {:?}; gravity ({}, {}) m/s^2",
         w.left, w.right, w.bottom, w.top, scene.gravity.x, scene.gravity.y
     );
+    for seg in &w.segments {
+        println!(
+            "  segment: {:?} from {} to {} m: {:?}",
+            seg.side, seg.from, seg.to, seg.wall
+        );
+    }
     let contact = if scene.bodies.len() > 1 {
         format!("{:?}", scene.contact)
     } else {

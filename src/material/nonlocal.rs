@@ -430,6 +430,17 @@ impl Material for Nonlocal {
     fn granular(&self) -> bool {
         true
     }
+    /// The fluidity's wall conditions are set per side (`fluidity_walls`), not per segment.
+    fn check_walls(&self, walls: &Walls) -> Result<(), String> {
+        if walls.segments.is_empty() {
+            return Ok(());
+        }
+        Err(
+            "wall segments are not supported with Nonlocal yet: the fluidity's wall \
+             conditions (fluidity_walls) hold for whole sides"
+                .to_string(),
+        )
+    }
     /// The explicit Laplacian needs the diffusion number `A^2 d^2 dt/(t0 h^2)` at most 1/4.
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
         let ad = self.amplitude * self.base.grain_diameter;

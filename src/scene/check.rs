@@ -2,7 +2,7 @@
 
 use std::collections::HashSet;
 
-use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
+use super::{InitialStress, Scene, Side, StressUpdate, TimeStep, Wall};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
@@ -234,6 +234,41 @@ impl Scene {
                 "a periodic wall needs a periodic opposite wall".to_string(),
             );
         }
+        for seg in &w.segments {
+            let axis = match seg.side {
+                Side::Left | Side::Right => 0,
+                Side::Bottom | Side::Top => 1,
+            };
+            let (lo, hi) = (d.origin[1 - axis], d.origin[1 - axis] + d.size[1 - axis]);
+            let problem = if w.side(seg.side) == Wall::Periodic {
+                Some("a periodic side cannot have segments".to_string())
+            } else if seg.wall == Wall::Periodic {
+                Some("a segment cannot be Periodic".to_string())
+            } else if !(seg.from.is_finite() && seg.to.is_finite() && seg.from < seg.to) {
+                Some(format!(
+                    "a segment needs from < to (m), got from {} to {}",
+                    seg.from, seg.to
+                ))
+            } else if seg.from < lo || seg.to > hi {
+                Some(format!(
+                    "a segment of the {:?} side must lie along it, within [{lo}, {hi}] m; got \
+                     [{}, {}]",
+                    seg.side, seg.from, seg.to
+                ))
+            } else if w.segments.iter().any(|o| {
+                !std::ptr::eq(o, seg) && o.side == seg.side && o.from < seg.to && seg.from < o.to
+            }) {
+                Some(format!(
+                    "segments of the {:?} side overlap at [{}, {}]",
+                    seg.side, seg.from, seg.to
+                ))
+            } else {
+                None
+            };
+            if let Some(why) = problem {
+                return err("segments", why);
+            }
+        }
         // The lock-free scatter's guarantee, checked for this grid before anything runs
         // (every grid passes: a unit test runs the check for every row count up to 1000).
         if let Err(why) = crate::grid::BandLayout::of(&self.grid()).check() {
@@ -397,7 +432,11 @@ impl Scene {
                 TimeStep::Fixed(dt) => dt,
                 TimeStep::Cfl(c) => c * grid.cell_size / b.material.wave_speed(),
             };
-            if let Err(e) = b.material.check_step(grid.cell_size, max_dt) {
+            if let Err(e) = b
+                .material
+                .check_step(grid.cell_size, max_dt)
+                .and_then(|()| b.material.check_walls(&self.walls))
+            {
                 return err(e);
             }
             let spacing = grid.cell_size / b.points_per_cell as f64;

@@ -28,7 +28,7 @@ use crate::shape_functions::{CpdiFixed, ShapeFunctions};
 use crate::step::spacing::Spacing;
 use crate::velocity::{AffineFlip, Transfer};
 
-pub use crate::resources::{TimeStep, Wall, Walls};
+pub use crate::resources::{Segment, Side, TimeStep, Wall, Walls};
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]

@@ -15,7 +15,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::{GridField, GridGeometry};
-use crate::resources::{Boundaries, Clock, Gravity, Wall, Walls};
+use crate::resources::{Boundaries, Clock, Gravity, Side, Wall, Walls};
 
 pub fn update_grid(
     clock: Res<Clock>,
@@ -97,21 +97,27 @@ fn constrain(field: &mut GridField, n: usize, mask: [bool; 2], dt: Option<f64>) 
     }
 }
 
-/// Applies the walls to the nodes on the domain's edges; `dt` as in [`constrain`].
+/// Applies the walls to the nodes on the domain's edges, each node by the condition at its
+/// place on the side (a segment's where one covers it); `dt` as in [`constrain`].
 pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt: Option<f64>) {
-    let sides = [
-        (walls.left, 0usize, true),
-        (walls.right, 0, false),
-        (walls.bottom, 1, true),
-        (walls.top, 1, false),
-    ];
-    for (wall, axis, low) in sides {
-        let mask = constrained(wall, axis);
-        if mask == [false, false] {
+    let nx = grid.nodes_along(0);
+    for (side, axis, low) in Side::ALL {
+        if walls.segments.iter().all(|s| s.side != side) {
+            let mask = constrained(walls.side(side), axis);
+            if mask == [false, false] {
+                continue;
+            }
+            for n in grid.side_nodes(axis, low) {
+                constrain(field, n, mask, dt);
+            }
             continue;
         }
         for n in grid.side_nodes(axis, low) {
-            constrain(field, n, mask, dt);
+            let along = grid.node_position(n % nx, n / nx)[1 - axis];
+            let mask = constrained(walls.at(side, along), axis);
+            if mask != [false, false] {
+                constrain(field, n, mask, dt);
+            }
         }
     }
 }

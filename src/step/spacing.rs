@@ -454,6 +454,7 @@ mod tests {
             right: side,
             bottom: floor,
             top: Wall::Free,
+            segments: Vec::new(),
         }
     }
 

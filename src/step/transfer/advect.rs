@@ -8,7 +8,8 @@ use rayon::prelude::*;
 use crate::body::Points;
 use crate::grid::GridGeometry;
 
-use crate::resources::{Boundaries, Clock, Wall, Walls};
+use crate::resources::{Boundaries, Clock, Side, Wall, Walls};
+use crate::stress::Stress;
 
 /// The density the constitutive update sees: each point's own `m/V`.
 pub fn point_density(mut bodies: Query<&mut Points>) {
@@ -24,6 +25,7 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
 
 /// The box the walls keep points in: a `Slip`, `NoSlip` or `Open` side bounds it, a `Free` or
 /// periodic one does not (a point past a free side stops the run; periodic sides wrap).
+/// Segments are not looked at: the box is what the sides' own conditions bound.
 pub(crate) fn kept_box(grid: &GridGeometry, w: &Walls) -> (DVec2, DVec2) {
     let (lo, hi) = (grid.origin, grid.max());
     let kept = |wall: Wall| matches!(wall, Wall::Slip | Wall::NoSlip | Wall::Open);
@@ -46,7 +48,8 @@ pub(crate) fn kept_box(grid: &GridGeometry, w: &Walls) -> (DVec2, DVec2) {
 /// into the wall (otherwise FLIP would keep it for ever, since the wall's nodes have no
 /// acceleration). A point crossing an `Open` side is retired: parked on the boundary with
 /// no mass, velocity or stress, and a negligible volume, so it no longer takes part. Past a
-/// `Free` side a point leaves, and the health check stops the run.
+/// `Free` side a point leaves, and the health check stops the run. Where a side has segments
+/// the condition is the one at the place the point crosses it.
 pub fn advect_points(
     grid: Res<GridGeometry>,
     clock: Res<Clock>,
@@ -54,14 +57,63 @@ pub fn advect_points(
     mut bodies: Query<&mut Points>,
 ) {
     let (dt, grid) = (clock.dt, &*grid);
-    let w = walls.0;
-    let (min, max) = kept_box(grid, &w);
+    let w = &walls.0;
+    if !w.segments.is_empty() {
+        return move_points(&mut bodies, grid, dt, |p| cross_segments(grid, w, p));
+    }
+    let (min, max) = kept_box(grid, w);
     // Per axis: whether leaving through the low / high side retires the point.
     let open = [
         [w.left == Wall::Open, w.right == Wall::Open],
         [w.bottom == Wall::Open, w.top == Wall::Open],
     ];
-    for mut points in &mut bodies {
+    move_points(&mut bodies, grid, dt, |p| {
+        *p.x = p.moved.clamp(min, max);
+        for a in 0..2 {
+            let (below, above) = (p.moved[a] < min[a], p.moved[a] > max[a]);
+            if (below && open[a][0]) || (above && open[a][1]) {
+                p.retire();
+                return;
+            }
+            if (below && p.v[a] < 0.0) || (above && p.v[a] > 0.0) {
+                p.v[a] = 0.0;
+            }
+        }
+    });
+}
+
+/// One point in the move: where the advection takes it (`moved`, wrapped on periodic axes)
+/// and what the walls may change.
+struct Moving<'a> {
+    moved: DVec2,
+    x: &'a mut DVec2,
+    v: &'a mut DVec2,
+    vol: &'a mut f64,
+    m: &'a mut f64,
+    t: &'a mut Stress,
+}
+
+impl Moving<'_> {
+    /// Parks the point where it stands (on the boundary) with no mass, velocity or stress
+    /// and a negligible volume.
+    fn retire(&mut self) {
+        *self.m = 0.0;
+        *self.v = DVec2::ZERO;
+        *self.t = Stress::ZERO;
+        *self.vol *= 1e-12;
+    }
+}
+
+/// Moves every live point of every body by `dt` times its advection velocity, updates its
+/// volume, and hands it to `walls` to place it (set `x`) against the sides; retired points
+/// stay parked.
+fn move_points(
+    bodies: &mut Query<&mut Points>,
+    grid: &GridGeometry,
+    dt: f64,
+    walls: impl Fn(&mut Moving) + Send + Sync,
+) {
+    for mut points in bodies.iter_mut() {
         let points = &mut *points;
         points
             .position
@@ -79,27 +131,49 @@ pub fn advect_points(
                 if *m == 0.0 {
                     // Retired earlier: stays parked.
                     *v = DVec2::ZERO;
-                    *t = crate::stress::Stress::ZERO;
+                    *t = Stress::ZERO;
                     return;
                 }
                 let moved = grid.wrap(*x + dt * adv);
-                *x = moved.clamp(min, max);
                 *vol *= exp_of_increment(dt * (l.x_axis.x + l.y_axis.y));
-                for a in 0..2 {
-                    let (below, above) = (moved[a] < min[a], moved[a] > max[a]);
-                    if (below && open[a][0]) || (above && open[a][1]) {
-                        *m = 0.0;
-                        *v = DVec2::ZERO;
-                        *t = crate::stress::Stress::ZERO;
-                        *vol *= 1e-12;
-                        return;
-                    }
-                    if (below && v[a] < 0.0) || (above && v[a] > 0.0) {
-                        v[a] = 0.0;
-                    }
-                }
+                walls(&mut Moving {
+                    moved,
+                    x,
+                    v,
+                    vol,
+                    m,
+                    t,
+                });
             });
     }
+}
+
+/// The walls with segments: a point that crosses a side meets the condition at the place it
+/// crosses (kept in by `Slip` and `NoSlip`, retired by `Open`, let go by `Free`).
+fn cross_segments(grid: &GridGeometry, w: &Walls, p: &mut Moving) {
+    let (lo, hi) = (grid.origin, grid.max());
+    let mut kept = p.moved;
+    for a in 0..2 {
+        let (below, above) = (p.moved[a] < lo[a], p.moved[a] > hi[a]);
+        if !(below || above) {
+            continue;
+        }
+        match w.at(Side::of(a, above), p.moved[1 - a]) {
+            Wall::Free | Wall::Periodic => {}
+            Wall::Open => {
+                *p.x = p.moved.clamp(lo, hi);
+                p.retire();
+                return;
+            }
+            Wall::Slip | Wall::NoSlip => {
+                kept[a] = if below { lo[a] } else { hi[a] };
+                if (below && p.v[a] < 0.0) || (above && p.v[a] > 0.0) {
+                    p.v[a] = 0.0;
+                }
+            }
+        }
+    }
+    *p.x = kept;
 }
 
 /// `e^x` for the volume change of one step, which is small: below 1e-3 in magnitude the
