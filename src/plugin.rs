@@ -24,6 +24,7 @@ use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
 use crate::material::nonlocal::Nonlocal;
 use crate::output::Output;
+use crate::output::discharge::Discharge;
 use crate::output::flow_field::FlowField;
 use crate::output::free_surface::FreeSurface;
 use crate::output::front::PressureFront;
@@ -62,6 +63,7 @@ impl Plugin for DefaultPlugins {
             .register::<dyn Output, PressureFront>()
             .register::<dyn Output, FlowField>()
             .register::<dyn Output, FreeSurface>()
+            .register::<dyn Output, Discharge>()
             .register::<dyn Output, Runout>()
             .register::<dyn Output, VelocityProfile>()
             .register::<dyn ShapeFunctions, Linear>()

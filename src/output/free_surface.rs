@@ -16,7 +16,7 @@ use crate::body::{Body, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::{
-    Interval, Output, OutputFaults, RunDir, check_every, points_of, series_csv, write_or_fault,
+    Interval, Output, OutputFaults, RunDir, check_every, due_points, series_csv, write_or_fault,
 };
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -88,14 +88,11 @@ fn record_surface(
     faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points)>,
 ) {
-    if !record.interval.due(&clock) {
-        return;
-    }
-    let Some(points) = points_of(&bodies, &record.spec.body) else {
+    let rec = &mut *record;
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
         return;
     };
     let [nx, ny] = grid.cells;
-    let rec = &mut *record;
     rec.cells.count(points, &grid);
     let heights: Vec<f64> = (0..nx)
         .map(|i| {

@@ -6,6 +6,7 @@
 //! truncated file that looks complete; the trajectory grows in `trajectory.csv.part` and is
 //! renamed when the run ends.
 
+pub mod discharge;
 pub mod flow_field;
 pub mod free_surface;
 pub mod front;
@@ -187,6 +188,20 @@ pub fn check_every(every: f64) -> Result<(), String> {
 /// The points of the body called `name`, among a query's bodies.
 pub fn points_of<'a>(bodies: &'a Query<(&Body, &Points)>, name: &str) -> Option<&'a Points> {
     bodies.iter().find(|(b, _)| b.name == name).map(|(_, p)| p)
+}
+
+/// The points of the body called `body` when `interval` is due at `clock` (the start of
+/// every periodic output's record); `None` when not due or when the body has no points.
+pub fn due_points<'a>(
+    interval: &mut Interval,
+    clock: &Clock,
+    bodies: &'a Query<(&Body, &Points)>,
+    body: &str,
+) -> Option<&'a Points> {
+    if !interval.due(clock) {
+        return None;
+    }
+    points_of(bodies, body)
 }
 
 /// Checks a list of output times: non-empty, finite, non-negative, increasing.

@@ -18,7 +18,7 @@ use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::summary::Section;
 use crate::output::{
-    Interval, Output, OutputFaults, RunDir, check_every, points_of, series_csv, write_or_fault,
+    Interval, Output, OutputFaults, RunDir, check_every, due_points, series_csv, write_or_fault,
 };
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -192,10 +192,8 @@ fn record_profile(
     faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points)>,
 ) {
-    if !record.interval.due(&clock) {
-        return;
-    }
-    let Some(points) = points_of(&bodies, &record.spec.body) else {
+    let rec = &mut *record;
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
         return;
     };
     record.times.push(clock.time);

@@ -22,7 +22,7 @@ use crate::grid::GridGeometry;
 use crate::output::free_surface::DenseCells;
 use crate::output::summary::Section;
 use crate::output::{
-    Interval, Output, OutputFaults, RunDir, check_every, points_of, series_csv, write_or_fault,
+    Interval, Output, OutputFaults, RunDir, check_every, due_points, series_csv, write_or_fault,
 };
 use crate::plugin::Install;
 use crate::registry::Item;
@@ -211,13 +211,10 @@ fn record_runout(
     faults: Res<OutputFaults>,
     bodies: Query<(&Body, &Points)>,
 ) {
-    if !record.interval.due(&clock) {
-        return;
-    }
-    let Some(points) = points_of(&bodies, &record.spec.body) else {
+    let rec = &mut *record;
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
         return;
     };
-    let rec = &mut *record;
     rec.cells.count(points, &grid);
     let Some(extent) = Extent::measure(points, &grid, &rec.cells) else {
         return;
