@@ -36,6 +36,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
+use crate::resources::{Segment, Side, Wall};
 use crate::step::bands::Shared;
 use crate::step::{Bands, Location};
 
@@ -133,13 +134,30 @@ pub enum NodeCondition {
     Fixed(f64),
 }
 
-/// A condition per side of the domain; periodic sides wrap whatever is set here.
+impl NodeCondition {
+    /// What a wall imposes unless the material chooses otherwise: a `NoSlip` wall fixes the
+    /// field at zero (no flow, hence no fluidity, at a wall that holds the material), any
+    /// other lets it through (zero flux).
+    pub fn default_for(wall: Wall) -> NodeCondition {
+        if wall == Wall::NoSlip {
+            NodeCondition::Fixed(0.0)
+        } else {
+            NodeCondition::ZeroFlux
+        }
+    }
+}
+
+/// A condition per side of the domain; periodic sides wrap whatever is set here. The nodes
+/// a wall segment covers (`Walls::at`) take the segment's wall's default condition instead
+/// ([`NodeCondition::default_for`]): an `Open` orifice in a `NoSlip` floor lets the field
+/// through.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FieldWalls {
+pub struct FieldWalls<'a> {
     pub left: NodeCondition,
     pub right: NodeCondition,
     pub bottom: NodeCondition,
     pub top: NodeCondition,
+    pub segments: &'a [Segment],
 }
 
 /// The least weight of an active node, in units of a full node's (`h^2`, the weight of a node
@@ -227,25 +245,34 @@ fn fix_walls(
 ) -> (Vec<bool>, Vec<FixedNode>) {
     let mut is_fixed = vec![false; grid.node_count()];
     let mut fixed = Vec::new();
-    let sides = [
-        (walls.left, 0usize, true),
-        (walls.right, 0, false),
-        (walls.bottom, 1, true),
-        (walls.top, 1, false),
-    ];
-    for (condition, axis, low) in sides {
-        let NodeCondition::Fixed(value) = condition else {
-            continue;
+    let nx = grid.nodes_along(0);
+    for (side, axis, low) in Side::ALL {
+        let condition = match side {
+            Side::Left => walls.left,
+            Side::Right => walls.right,
+            Side::Bottom => walls.bottom,
+            Side::Top => walls.top,
         };
-        if grid.periodic[axis] {
+        let segmented = walls.segments.iter().any(|s| s.side == side);
+        if grid.periodic[axis] || (!segmented && condition == NodeCondition::ZeroFlux) {
             continue;
         }
-        let stride = if axis == 0 { 1 } else { grid.nodes_along(0) };
+        let stride = if axis == 0 { 1 } else { nx };
         let along = grid.nodes_along(axis);
         for n in grid.side_nodes(axis, low) {
             if !field.active(n) || is_fixed[n] {
                 continue;
             }
+            let here = grid.node_position(n % nx, n / nx)[1 - axis];
+            let covering = walls
+                .segments
+                .iter()
+                .find(|s| s.side == side && s.from < here && here < s.to);
+            let NodeCondition::Fixed(value) =
+                covering.map_or(condition, |s| NodeCondition::default_for(s.wall))
+            else {
+                continue;
+            };
             field.value[n] = value;
             is_fixed[n] = true;
             let inward =
@@ -426,6 +453,7 @@ mod tests {
         right: NodeCondition::ZeroFlux,
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
+        segments: &[],
     };
 
     /// The centre of a cell reads the mean of its active corners, wrapping on a periodic
@@ -500,6 +528,45 @@ mod tests {
         for (i, l) in out.iter().take(nx).enumerate() {
             assert!((l - 2.0).abs() < 1e-12, "bottom node {i}: {l}");
         }
+    }
+
+    /// An `Open` segment of a fixed floor leaves the nodes strictly inside it free (zero
+    /// flux) and fixes the rest; a `NoSlip` segment of a zero-flux side fixes its nodes.
+    #[test]
+    fn wall_segments_set_their_own_conditions() {
+        let grid = GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 1.0,
+            cells: [6, 2],
+            periodic: [false, false],
+        };
+        let nodes = 7 * 3;
+        let segments = [
+            Segment {
+                side: Side::Bottom,
+                from: 2.0,
+                to: 4.0,
+                wall: Wall::Open,
+            },
+            Segment {
+                side: Side::Top,
+                from: 0.5,
+                to: 1.5,
+                wall: Wall::NoSlip,
+            },
+        ];
+        let walls = FieldWalls {
+            bottom: NodeCondition::Fixed(0.0),
+            segments: &segments,
+            ..OPEN
+        };
+        let mut f = field_of(vec![5.0; nodes]);
+        let mut out = Vec::new();
+        laplacian(&grid, &mut f, &walls, &mut out);
+        let bottom: Vec<f64> = f.value[..7].to_vec();
+        assert_eq!(bottom, [0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0]);
+        let top: Vec<f64> = f.value[14..].to_vec();
+        assert_eq!(top, [5.0, 0.0, 5.0, 5.0, 5.0, 5.0, 5.0]);
     }
 
     #[test]

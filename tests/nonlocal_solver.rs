@@ -120,6 +120,7 @@ fn a_creep_slab_matches_the_cosh_profile_to_second_order() {
         right: NodeCondition::ZeroFlux,
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
+        segments: &[],
     };
     let mut errors = Vec::new();
     for cells in [10, 20, 40] {
@@ -173,6 +174,7 @@ fn a_small_mode_about_zero_grows_at_the_linear_rate() {
         right: NodeCondition::ZeroFlux,
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
+        segments: &[],
     };
     let amplitude = |g: &NodalScalar| {
         2.0 / cells as f64

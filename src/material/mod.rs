@@ -21,7 +21,7 @@ use serde::de::DeserializeOwned;
 use crate::body::{Phase, PointStates, Points, inertial_number};
 use crate::grid_field::{GridFields, PointFields, StartBands};
 use crate::registry::{DynItem, Item};
-use crate::resources::{Clock, Walls};
+use crate::resources::Clock;
 use crate::step::{Core, MaterialUpdates, StepSet};
 use crate::stress::Stress;
 
@@ -72,11 +72,6 @@ pub trait Material: Item {
     fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {
         Ok(())
     }
-    /// Whether this material can run inside `walls` (the scene check asks, before a run);
-    /// by default any.
-    fn check_walls(&self, _walls: &Walls) -> Result<(), String> {
-        Ok(())
-    }
     /// The per-point values of grid fields this material reads in [`Material::update`]
     /// (`PointStep::fields`), which the systems of [`Material::add_field_systems`] fill;
     /// none by default.
@@ -114,7 +109,6 @@ pub trait MaterialSpec: DynItem {
     fn inertial_scale(&self) -> Option<f64>;
     fn granular(&self) -> bool;
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String>;
-    fn check_walls(&self, walls: &Walls) -> Result<(), String>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
     /// Adds this material's update system (called once per material type in a scene).
@@ -150,9 +144,6 @@ impl<M: Material> MaterialSpec for M {
     }
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {
         Material::check_step(self, cell_size, max_dt)
-    }
-    fn check_walls(&self, walls: &Walls) -> Result<(), String> {
-        Material::check_walls(self, walls)
     }
     fn attach(&self, entity: &mut EntityWorldMut, points: usize) {
         entity.insert(MaterialState::<M> {

@@ -129,24 +129,20 @@ pub struct FluidityWalls {
 }
 
 impl FluidityWalls {
-    /// The conditions on the grid field, given the scene's walls.
-    pub fn resolve(&self, walls: &Walls) -> FieldWalls {
-        let side = |choice: Option<FluidityWall>, wall: Wall| {
-            let choice = choice.unwrap_or(if wall == Wall::NoSlip {
-                FluidityWall::Zero
-            } else {
-                FluidityWall::ZeroFlux
-            });
-            match choice {
-                FluidityWall::Zero => NodeCondition::Fixed(0.0),
-                FluidityWall::ZeroFlux => NodeCondition::ZeroFlux,
-            }
+    /// The conditions on the grid field, given the scene's walls; the wall segments take
+    /// their own wall's default (`NodeCondition::default_for`).
+    pub fn resolve<'a>(&self, walls: &'a Walls) -> FieldWalls<'a> {
+        let side = |choice: Option<FluidityWall>, wall: Wall| match choice {
+            None => NodeCondition::default_for(wall),
+            Some(FluidityWall::Zero) => NodeCondition::Fixed(0.0),
+            Some(FluidityWall::ZeroFlux) => NodeCondition::ZeroFlux,
         };
         FieldWalls {
             left: side(self.left, walls.left),
             right: side(self.right, walls.right),
             bottom: side(self.bottom, walls.bottom),
             top: side(self.top, walls.top),
+            segments: &walls.segments,
         }
     }
 }
@@ -429,17 +425,6 @@ impl Material for Nonlocal {
     }
     fn granular(&self) -> bool {
         true
-    }
-    /// The fluidity's wall conditions are set per side (`fluidity_walls`), not per segment.
-    fn check_walls(&self, walls: &Walls) -> Result<(), String> {
-        if walls.segments.is_empty() {
-            return Ok(());
-        }
-        Err(
-            "wall segments are not supported with Nonlocal yet: the fluidity's wall \
-             conditions (fluidity_walls) hold for whole sides"
-                .to_string(),
-        )
     }
     /// The explicit Laplacian needs the diffusion number `A^2 d^2 dt/(t0 h^2)` at most 1/4.
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String> {

@@ -432,11 +432,7 @@ impl Scene {
                 TimeStep::Fixed(dt) => dt,
                 TimeStep::Cfl(c) => c * grid.cell_size / b.material.wave_speed(),
             };
-            if let Err(e) = b
-                .material
-                .check_step(grid.cell_size, max_dt)
-                .and_then(|()| b.material.check_walls(&self.walls))
-            {
+            if let Err(e) = b.material.check_step(grid.cell_size, max_dt) {
                 return err(e);
             }
             let spacing = grid.cell_size / b.points_per_cell as f64;
