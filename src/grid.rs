@@ -62,6 +62,13 @@ impl GridGeometry {
         self.origin + DVec2::new(i as f64, j as f64) * self.cell_size
     }
 
+    /// Coordinate along `axis` of the node of flat index `n` (the place of a side's node
+    /// along that side, for wall segments).
+    pub fn node_coordinate(&self, n: usize, axis: usize) -> f64 {
+        let nx = self.nodes_along(0);
+        self.node_position(n % nx, n / nx)[axis]
+    }
+
     /// Flat index of the cell holding `x` (clamped into the grid).
     pub fn cell_of(&self, x: DVec2) -> usize {
         let [i, j] = self.cell_at(x, 1.0 / self.cell_size);

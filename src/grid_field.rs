@@ -160,6 +160,18 @@ pub struct FieldWalls<'a> {
     pub segments: &'a [Segment],
 }
 
+impl FieldWalls<'_> {
+    /// The condition of a whole side (its segments aside).
+    pub fn side(&self, side: Side) -> NodeCondition {
+        match side {
+            Side::Left => self.left,
+            Side::Right => self.right,
+            Side::Bottom => self.bottom,
+            Side::Top => self.top,
+        }
+    }
+}
+
 /// The least weight of an active node, in units of a full node's (`h^2`, the weight of a node
 /// whose whole support is material): an eighth is the weight of a node a flat free surface
 /// lies halfway to (`f^2/2` for a surface a fraction `f` of a cell past the last full node).
@@ -245,29 +257,20 @@ fn fix_walls(
 ) -> (Vec<bool>, Vec<FixedNode>) {
     let mut is_fixed = vec![false; grid.node_count()];
     let mut fixed = Vec::new();
-    let nx = grid.nodes_along(0);
     for (side, axis, low) in Side::ALL {
-        let condition = match side {
-            Side::Left => walls.left,
-            Side::Right => walls.right,
-            Side::Bottom => walls.bottom,
-            Side::Top => walls.top,
-        };
+        let condition = walls.side(side);
         let segmented = walls.segments.iter().any(|s| s.side == side);
         if grid.periodic[axis] || (!segmented && condition == NodeCondition::ZeroFlux) {
             continue;
         }
-        let stride = if axis == 0 { 1 } else { nx };
+        let stride = if axis == 0 { 1 } else { grid.nodes_along(0) };
         let along = grid.nodes_along(axis);
         for n in grid.side_nodes(axis, low) {
             if !field.active(n) || is_fixed[n] {
                 continue;
             }
-            let here = grid.node_position(n % nx, n / nx)[1 - axis];
-            let covering = walls
-                .segments
-                .iter()
-                .find(|s| s.side == side && s.from < here && here < s.to);
+            let here = grid.node_coordinate(n, 1 - axis);
+            let covering = walls.segments.iter().find(|s| s.covers(side, here));
             let NodeCondition::Fixed(value) =
                 covering.map_or(condition, |s| NodeCondition::default_for(s.wall))
             else {

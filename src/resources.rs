@@ -149,6 +149,14 @@ impl Side {
         (Side::Top, 1, false),
     ];
 
+    /// The axis of the side's normal (0 for left and right, 1 for bottom and top).
+    pub fn normal_axis(self) -> usize {
+        match self {
+            Side::Left | Side::Right => 0,
+            Side::Bottom | Side::Top => 1,
+        }
+    }
+
     /// The side at the low (`high = false`) or high end of `axis`.
     pub fn of(axis: usize, high: bool) -> Side {
         match (axis, high) {
@@ -173,6 +181,14 @@ pub struct Segment {
     pub wall: Wall,
 }
 
+impl Segment {
+    /// Whether this segment covers the place `along` of `side` (strictly inside it).
+    #[inline]
+    pub fn covers(&self, side: Side, along: f64) -> bool {
+        self.side == side && self.from < along && along < self.to
+    }
+}
+
 impl Walls {
     /// The condition of a whole side (its segments aside).
     pub fn side(&self, side: Side) -> Wall {
@@ -190,7 +206,7 @@ impl Walls {
     pub fn at(&self, side: Side, along: f64) -> Wall {
         self.segments
             .iter()
-            .find(|s| s.side == side && s.from < along && along < s.to)
+            .find(|s| s.covers(side, along))
             .map_or(self.side(side), |s| s.wall)
     }
 }

@@ -2,7 +2,7 @@
 
 use std::collections::HashSet;
 
-use super::{InitialStress, Scene, Side, StressUpdate, TimeStep, Wall};
+use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::grid::GridGeometry;
@@ -235,10 +235,7 @@ impl Scene {
             );
         }
         for seg in &w.segments {
-            let axis = match seg.side {
-                Side::Left | Side::Right => 0,
-                Side::Bottom | Side::Top => 1,
-            };
+            let axis = seg.side.normal_axis();
             let (lo, hi) = (d.origin[1 - axis], d.origin[1 - axis] + d.size[1 - axis]);
             let problem = if w.side(seg.side) == Wall::Periodic {
                 Some("a periodic side cannot have segments".to_string())

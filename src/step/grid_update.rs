@@ -100,7 +100,6 @@ fn constrain(field: &mut GridField, n: usize, mask: [bool; 2], dt: Option<f64>) 
 /// Applies the walls to the nodes on the domain's edges, each node by the condition at its
 /// place on the side (a segment's where one covers it); `dt` as in [`constrain`].
 pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt: Option<f64>) {
-    let nx = grid.nodes_along(0);
     for (side, axis, low) in Side::ALL {
         if walls.segments.iter().all(|s| s.side != side) {
             let mask = constrained(walls.side(side), axis);
@@ -113,7 +112,7 @@ pub fn apply_walls(grid: &GridGeometry, walls: &Walls, field: &mut GridField, dt
             continue;
         }
         for n in grid.side_nodes(axis, low) {
-            let along = grid.node_position(n % nx, n / nx)[1 - axis];
+            let along = grid.node_coordinate(n, 1 - axis);
             let mask = constrained(walls.at(side, along), axis);
             if mask != [false, false] {
                 constrain(field, n, mask, dt);
