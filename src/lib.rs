@@ -21,6 +21,7 @@ pub mod grid;
 pub mod grid_field;
 pub mod linefit;
 pub mod material;
+pub mod obstacle;
 pub mod output;
 pub mod plugin;
 pub mod registry;

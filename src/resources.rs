@@ -211,8 +211,8 @@ impl Walls {
     }
 }
 
-/// Boundary condition on one side.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+/// Boundary condition on one side, a segment of one, or an obstacle's surface.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 pub enum Wall {
     /// No constraint: material leaving the domain stops the run.
     Free,
@@ -224,6 +224,10 @@ pub enum Wall {
     Slip,
     /// Both velocity components are zero.
     NoSlip,
+    /// Coulomb friction with coefficient `friction` (`Frictional(friction: 0.3)`): motion
+    /// into the wall is stopped and the sliding speed reduced by `friction` times the normal
+    /// speed stopped, down to zero; material may leave the wall (`obstacle::surface_velocity`).
+    Frictional { friction: f64 },
     /// Wraps to the opposite side (which must be periodic too).
     Periodic,
 }

@@ -11,6 +11,7 @@ use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
+use crate::obstacle::Obstacles;
 use crate::output::trajectory::Trajectory;
 use crate::output::{Interval, OutputFaults, RunDir};
 use crate::plugin::Install;
@@ -207,6 +208,7 @@ impl Simulation {
             condition.install(&mut Install::new(&mut world, &mut schedule));
         }
         scene.registries.install(&mut world, &mut schedule);
+        world.insert_resource(Obstacles::new(&scene.obstacles, &grid));
         world.insert_resource(grid);
         world.insert_resource(Clock::start(scene.time.end));
         world.insert_resource(StepRule::new(scene.time.step, scene.time.allow_unstable));

@@ -153,6 +153,31 @@ fn bad_scenes_give_their_messages() {
             "Unexpected field named `sied`",
             Some(7),
         ),
+        // Frictional walls and obstacles (issue 40).
+        (
+            6,
+            "    walls: (left: Frictional(friction: -0.1), right: Slip, bottom: NoSlip, top: Free),",
+            "a Frictional wall needs a friction coefficient >= 0, got -0.1",
+            Some(6),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    obstacles: [(shape: Rectangle(min: (0.0, 0.5), max: (0.15, 0.65)), wall: Open)],",
+            "obstacle 0 (Rectangle): an obstacle's wall must be Slip, NoSlip or Frictional(friction: mu), got Open",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    obstacles: [(shape: Rectangle(min: (0.0, 0.51), max: (0.15, 0.52)), wall: Slip)],",
+            "obstacle 0 (Rectangle) holds no grid node (cell size 0.1 m)",
+            Some(7),
+        ),
+        (
+            6,
+            "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    obstacles: [(shape: Rectangle(min: (0.0, 0.0), max: (0.3, 0.2)), wall: Slip)],",
+            "body \"block\" starts inside obstacle 0 (Rectangle)",
+            Some(10),
+        ),
         (
             11,
             "            material: LinearElastic(density: 1000.0, youngs_modulus: 1e6, poisson_ratio: 0.5),",

@@ -74,32 +74,6 @@ fn incline(theta_deg: f64, mu: f64) -> regolith::Scene {
     )
 }
 
-/// Least-squares acceleration of x(t) = x0 + v0 t + a t^2 / 2 (normal equations solved by
-/// Cramer's rule).
-fn fitted_acceleration(t: &[f64], x: &[f64]) -> f64 {
-    let mut m = [[0.0; 3]; 3];
-    let mut r = [0.0; 3];
-    for (&ti, &xi) in t.iter().zip(x) {
-        let row = [1.0, ti, 0.5 * ti * ti];
-        for (i, ri) in row.iter().enumerate() {
-            r[i] += ri * xi;
-            for (j, rj) in row.iter().enumerate() {
-                m[i][j] += ri * rj;
-            }
-        }
-    }
-    let det = |a: [[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-    };
-    let mut third = m;
-    for i in 0..3 {
-        third[i][2] = r[i];
-    }
-    det(third) / det(m)
-}
-
 /// Above the friction angle the block slides with `g (sin theta - mu cos theta)`; the fit
 /// skips the first 50 ms, in which the unstressed bodies settle elastically under the normal
 /// load. Tolerance 2% (the issue's); measured 0.002%. Frictionless sliding must give
@@ -118,7 +92,7 @@ fn check_sliding(theta: f64, mu: f64) {
     let t = tr.series(0);
     let x = tr.series(tr.column("block", "x").unwrap());
     let keep: Vec<usize> = (0..t.len()).filter(|&k| t[k] >= 0.05).collect();
-    let a = fitted_acceleration(
+    let a = common::fitted_acceleration(
         &keep.iter().map(|&k| t[k]).collect::<Vec<_>>(),
         &keep.iter().map(|&k| x[k]).collect::<Vec<_>>(),
     );

@@ -102,6 +102,21 @@ pub(crate) enum Command {
         #[arg(long)]
         spline: bool,
     },
+    /// Fit Beverloo's law W = C rho_b sqrt(g) (D - k d)^beta to silo runs (each run's
+    /// opening from its scene's Open floor segments, its rate from its Discharge output),
+    /// one fit per grid, with beta = 3/2 and free; writes beverloo.md and beverloo.png.
+    Beverloo {
+        /// Run directories, or sweep output directories (all their runs); runs on several
+        /// grids are fitted grid by grid.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The grain diameter d (m), e.g. 0.005 for the PS-1 discs.
+        #[arg(long, value_name = "METRES")]
+        grain_diameter: f64,
+        /// Where beverloo.md and beverloo.png go (default: the first directory given).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Run the coarse versions of the paper's experiments (reusing finished runs) and draw
     /// the paper's figures from them as PNG.
     Figures {

@@ -202,6 +202,41 @@ pub(crate) fn resume(
     Ok(())
 }
 
+/// `regolith beverloo`: reads the runs, fits each grid, writes `beverloo.md` and
+/// `beverloo.png` and prints the report.
+pub(crate) fn beverloo(
+    registries: &Arc<Registries>,
+    dirs: &[PathBuf],
+    grain_diameter: f64,
+    out: Option<PathBuf>,
+) -> Result<(), Error> {
+    use regolith_lab::beverloo::{by_grid, figure, read_run, report};
+    use regolith_lab::poncelet::expand_dirs;
+    let fail = |m: String| Error::Scene(SceneError::file("regolith beverloo", m));
+    if !(grain_diameter.is_finite() && grain_diameter > 0.0) {
+        return Err(fail(format!(
+            "--grain-diameter must be a positive length (m), got {grain_diameter}"
+        )));
+    }
+    let out = out.unwrap_or_else(|| dirs[0].clone());
+    let runs = expand_dirs(dirs)
+        .map_err(fail)?
+        .iter()
+        .map(|d| read_run(d, registries))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(fail)?;
+    let grids = by_grid(runs);
+    let md = report(&grids, grain_diameter);
+    std::fs::create_dir_all(&out).map_err(|e| fail(format!("{}: {e}", out.display())))?;
+    let table = out.join("beverloo.md");
+    std::fs::write(&table, &md).map_err(|e| fail(format!("{}: {e}", table.display())))?;
+    let png = out.join("beverloo.png");
+    figure(&grids, grain_diameter, &png).map_err(|e| fail(format!("{}: {e}", png.display())))?;
+    print!("{md}");
+    println!("wrote {} and {}", table.display(), png.display());
+    Ok(())
+}
+
 /// `--window`, `--cells` and `--spline` of `regolith fit`.
 type MethodFlags = (Option<f64>, Option<f64>, bool);
 
@@ -373,6 +408,19 @@ pub(crate) fn check(
         println!(
             "  segment: {:?} from {} to {} m: {:?}",
             seg.side, seg.from, seg.to, seg.wall
+        );
+    }
+    for (k, o) in scene.obstacles.iter().enumerate() {
+        let (lo, hi) = o.shape.bounds();
+        let held = regolith::obstacle::Obstacles::nodes_inside(&*o.shape.0, &g).len();
+        println!(
+            "  obstacle {k}: {} from ({}, {}) to ({}, {}) m, {held} grid nodes held: {:?}",
+            o.shape.name(),
+            lo.x,
+            lo.y,
+            hi.x,
+            hi.y,
+            o.wall
         );
     }
     let contact = if scene.bodies.len() > 1 {

@@ -1,7 +1,7 @@
 //! The command line: `regolith run` a scene, `check` it without running, `resume` a run
 //! from its checkpoint, `sweep` a parameter cross product or `study` the numerical knobs
-//! (here, or planned for GNU parallel and Slurm and collected), `fit` the drag law, or draw
-//! the paper's `figures`.
+//! (here, or planned for GNU parallel and Slurm and collected), `fit` the drag law, fit
+//! Beverloo's law to silo runs (`beverloo`), or draw the paper's `figures`.
 //!
 //! Every error ends the program with a non-zero status and one line on stderr that says what
 //! and where; nothing a user types or writes in a scene may cause a panic. A plugin crate
@@ -23,7 +23,7 @@ use regolith_lab::study::Study;
 use regolith_lab::sweep::Sweep;
 
 use args::{Cli, Command};
-use commands::{RunFlags, batch_command, check, fit, resume, run};
+use commands::{RunFlags, batch_command, beverloo, check, fit, resume, run};
 
 /// Parses the process arguments and runs the command with the plugins of `app`.
 pub fn main_with(app: Regolith) -> ExitCode {
@@ -95,6 +95,11 @@ pub fn main_with(app: Regolith) -> ExitCode {
             out,
             (window, cells, spline),
         ),
+        Command::Beverloo {
+            runs,
+            grain_diameter,
+            out,
+        } => beverloo(&registries, &runs, grain_diameter, out),
         Command::Figures {
             out,
             runs,

@@ -29,6 +29,7 @@ use serde::Deserialize;
 
 use crate::body::Body;
 use crate::grid::{GridField, GridGeometry};
+use crate::obstacle::Obstacles;
 use crate::registry::{DynItem, Item};
 use crate::resources::{Boundaries, Clock};
 use crate::step::{Core, StepSet, apply_walls};
@@ -293,6 +294,7 @@ pub fn frictional(
     contact: Res<Frictional>,
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
+    obstacles: Res<Obstacles>,
     mut scratch: Local<ContactScratch>,
     mut bodies: Query<(&Body, &mut GridField)>,
 ) {
@@ -354,7 +356,7 @@ pub fn frictional(
                 apply_impulse(&mut f, n, impulse, dt);
             }
         }
-        apply_walls(&grid, &walls.0, &mut f, Some(dt));
+        apply_walls(&grid, &walls.0, &obstacles, &mut f, Some(dt));
     }
 }
 

@@ -37,6 +37,59 @@ impl Shape for Rectangle {
         let s = self.max - self.min;
         Some(s.x * s.y)
     }
+    fn outward_normal(&self, p: DVec2, _reach: f64) -> DVec2 {
+        let (a, b) = (self.min, self.max);
+        let corners = [a, DVec2::new(b.x, a.y), b, DVec2::new(a.x, b.y)];
+        edge_normal((0..4).map(|i| (corners[i], corners[(i + 1) % 4])), p, |q| {
+            self.contains(q)
+        })
+    }
+}
+
+/// The outward normal of a polygonal boundary (given by its edges) nearest to `p`: the unit
+/// vector from `p` to its nearest boundary point when `p` is inside, from that point to `p`
+/// when outside. Where several edges are nearest within round-off (a node on a corner's
+/// bisector), the directions to each are averaged, which gives the bisector; a point on an
+/// edge itself takes the edge's normal turned to the side `contains` says is outside.
+pub fn edge_normal(
+    edges: impl Iterator<Item = (DVec2, DVec2)> + Clone,
+    p: DVec2,
+    contains: impl Fn(DVec2) -> bool,
+) -> DVec2 {
+    let nearest = |a: DVec2, b: DVec2| {
+        let ab = b - a;
+        let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+        a + t * ab
+    };
+    let scale = edges
+        .clone()
+        .map(|(a, b)| a.distance(b))
+        .fold(0.0, f64::max);
+    let d_min = edges
+        .clone()
+        .map(|(a, b)| nearest(a, b).distance(p))
+        .fold(f64::INFINITY, f64::min);
+    let tie = d_min + 1e-9 * scale;
+    let sign = if contains(p) { -1.0 } else { 1.0 };
+    let mut sum = DVec2::ZERO;
+    for (a, b) in edges {
+        let q = nearest(a, b);
+        if q.distance(p) > tie {
+            continue;
+        }
+        let away = p - q;
+        sum += if away.length() > 1e-9 * scale {
+            sign * away.normalize()
+        } else {
+            let n = (b - a).perp().normalize();
+            if contains(p + 1e-6 * scale * n) {
+                -n
+            } else {
+                n
+            }
+        };
+    }
+    sum.normalize_or_zero()
 }
 
 /// `Disc(centre: (x, y), radius: r)`.
@@ -69,6 +122,9 @@ impl Shape for Disc {
     fn area(&self) -> Option<f64> {
         Some(std::f64::consts::PI * self.radius * self.radius)
     }
+    fn outward_normal(&self, p: DVec2, _reach: f64) -> DVec2 {
+        (p - self.centre).normalize_or_zero()
+    }
 }
 
 /// `Polygon(vertices: [(x, y), ...])`: a simple (non self-intersecting) polygon, either winding.
@@ -79,7 +135,7 @@ pub struct Polygon {
 }
 
 impl Polygon {
-    fn edges(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+    fn edges(&self) -> impl Iterator<Item = (DVec2, DVec2)> + Clone + '_ {
         let n = self.vertices.len();
         (0..n).map(move |i| (self.vertices[i], self.vertices[(i + 1) % n]))
     }
@@ -153,6 +209,9 @@ impl Shape for Polygon {
     }
     fn area(&self) -> Option<f64> {
         Some(self.signed_area().abs())
+    }
+    fn outward_normal(&self, p: DVec2, _reach: f64) -> DVec2 {
+        edge_normal(self.edges(), p, |q| self.contains(q))
     }
 }
 

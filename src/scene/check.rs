@@ -5,7 +5,9 @@ use std::collections::HashSet;
 use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
 use crate::error::SceneError;
 use crate::fill::fill;
+use crate::geometry::Shape;
 use crate::grid::GridGeometry;
+use crate::obstacle::Obstacles;
 use crate::registry::Item;
 use crate::shape_functions::Linear;
 use glam::DVec2;
@@ -266,6 +268,17 @@ impl Scene {
                 return err("segments", why);
             }
         }
+        let sides = [w.left, w.right, w.bottom, w.top];
+        let segment_walls = w.segments.iter().map(|s| s.wall);
+        if let Some(why) = sides
+            .into_iter()
+            .chain(segment_walls)
+            .find_map(friction_problem)
+        {
+            return err("Frictional", why);
+        }
+        self.check_obstacles()
+            .or_else(|why| err("obstacles", why))?;
         // The lock-free scatter's guarantee, checked for this grid before anything runs
         // (every grid passes: a unit test runs the check for every row count up to 1000).
         if let Err(why) = crate::grid::BandLayout::of(&self.grid()).check() {
@@ -345,6 +358,24 @@ impl Scene {
                 "max_kinetic_energy",
                 format!("limits.max_kinetic_energy must be a positive number (J/m), got {ke}"),
             );
+        }
+        Ok(())
+    }
+
+    /// Each obstacle: a surface an obstacle can have, and at least one grid node inside.
+    fn check_obstacles(&self) -> Result<(), String> {
+        let grid = self.grid();
+        for (k, o) in self.obstacles.iter().enumerate() {
+            let which = format!("obstacle {k} ({})", o.shape.name());
+            if let Some(why) = o.check().err().or_else(|| friction_problem(o.wall)) {
+                return Err(format!("{which}: {why}"));
+            }
+            if Obstacles::nodes_inside(&*o.shape.0, &grid).is_empty() {
+                return Err(format!(
+                    "{which} holds no grid node (cell size {} m): material would pass                      through it; make it at least a cell thick",
+                    grid.cell_size
+                ));
+            }
         }
         Ok(())
     }
@@ -450,23 +481,49 @@ impl Scene {
             lattices.push(lattice);
         }
         for (a, la) in self.bodies.iter().zip(&lattices) {
-            for b in &self.bodies {
-                if std::ptr::eq(a, b) {
-                    continue;
-                }
-                if let Some(p) = la.positions.iter().find(|p| b.shape.contains(**p)) {
-                    return Err(near(
-                        text,
-                        origin,
-                        &format!("\"{}\"", a.name),
-                        format!(
-                            "bodies \"{}\" and \"{}\" overlap (e.g. at ({:.4}, {:.4})); bodies must start apart",
-                            a.name, b.name, p.x, p.y
-                        ),
-                    ));
-                }
+            // A shape that holds one of `a`'s points: refused at `a`'s line.
+            let clash = |shape: &dyn Shape, what: String, rule: &str| match la
+                .positions
+                .iter()
+                .find(|p| shape.contains(**p))
+            {
+                Some(p) => Err(near(
+                    text,
+                    origin,
+                    &format!("\"{}\"", a.name),
+                    format!("{what} (e.g. at ({:.4}, {:.4})); {rule}", p.x, p.y),
+                )),
+                None => Ok(()),
+            };
+            for b in self.bodies.iter().filter(|b| !std::ptr::eq(a, *b)) {
+                clash(
+                    &*b.shape,
+                    format!("bodies \"{}\" and \"{}\" overlap", a.name, b.name),
+                    "bodies must start apart",
+                )?;
+            }
+            for (k, o) in self.obstacles.iter().enumerate() {
+                clash(
+                    &*o.shape,
+                    format!(
+                        "body \"{}\" starts inside obstacle {k} ({})",
+                        a.name,
+                        o.shape.name()
+                    ),
+                    "bodies must start outside the obstacles",
+                )?;
             }
         }
         Ok(())
+    }
+}
+
+/// Why a `Frictional` wall's coefficient is not a friction coefficient, if it is not.
+fn friction_problem(wall: Wall) -> Option<String> {
+    match wall {
+        Wall::Frictional { friction } if !(friction.is_finite() && friction >= 0.0) => Some(
+            format!("a Frictional wall needs a friction coefficient >= 0, got {friction}"),
+        ),
+        _ => None,
     }
 }

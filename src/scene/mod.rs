@@ -22,6 +22,7 @@ use crate::contact::{Contact, NoSlip};
 use crate::error::SceneError;
 use crate::geometry::Shape;
 use crate::material::MaterialSpec;
+use crate::obstacle::ObstacleSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
 use crate::shape_functions::{CpdiFixed, ShapeFunctions};
@@ -45,6 +46,11 @@ pub struct Scene {
     #[serde(default = "default_gravity")]
     pub gravity: DVec2,
     pub walls: Walls,
+    /// Fixed boundaries of any shape inside the domain (a hopper's walls), each
+    /// `(shape: Polygon(..), wall: Frictional(friction: mu))`; none by default
+    /// (`crate::obstacle`).
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
     /// Shape-function scheme: `CpdiFixed` (the paper's, default), `Linear` or
     /// `QuadraticBspline`, or a plugin's.
     #[serde(default = "default_integration")]

@@ -25,9 +25,9 @@
 //! 5. `delta_p = -alpha beta g_p`, `beta = sum_p |g_p|^2 / sum_i d_i^2` with
 //!    `d_i = sum_p V_p grad S_i(x_p) . g_p` (the Gauss-Newton step on `E` along `-g`), each
 //!    shift at most `max_shift` step cells long;
-//! 6. `x_p += delta_p`, kept inside the walls as the move keeps points. Velocities, affine
-//!    fields, volumes, stresses and material history are untouched: mass and momentum are
-//!    exactly conserved.
+//! 6. `x_p += delta_p`, kept inside the walls and out of the obstacles as the move keeps
+//!    points. Velocities, affine fields, volumes, stresses and material history are
+//!    untouched: mass and momentum are exactly conserved.
 //!
 //! Only the points of granular bodies move (`MaterialSpec::granular`): their stress
 //! keeps no memory of where the points sit, while shifting an elastic body's points would
@@ -42,6 +42,7 @@ use serde::Deserialize;
 use super::transfer::kept_box;
 use crate::body::{Body, Points};
 use crate::grid::GridGeometry;
+use crate::obstacle::Obstacles;
 use crate::resources::Boundaries;
 
 /// Over-fill below this fraction of a node's reference volume is round-off, not crowding.
@@ -256,6 +257,7 @@ fn reference_volume(grid: &GridGeometry, i: usize, j: usize) -> f64 {
 pub fn correct_spacing(
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
+    obstacles: Res<Obstacles>,
     constants: Res<DeltaCorrection>,
     mut scratch: ResMut<SpacingScratch>,
     mut bodies: Query<(Entity, &Body, &mut Points)>,
@@ -367,7 +369,7 @@ pub fn correct_spacing(
     let beta = constants.alpha * squared / curvature;
     let longest = constants.max_shift * step_grid.cell_size;
     let (min, max) = kept_box(grid, &walls.0);
-    // 6. The shifts, clamped, kept inside the walls.
+    // 6. The shifts, clamped, kept inside the walls and out of the obstacles.
     for (&(_, entity), g) in order.iter().zip(&*gradient) {
         if g.is_empty() {
             continue;
@@ -388,7 +390,9 @@ pub fn correct_spacing(
                 } else {
                     shift
                 };
-                *x = grid.wrap(*x + shift).clamp(min, max);
+                let to = grid.wrap(*x + shift).clamp(min, max);
+                // Positions only: the velocity the stop would change is a throwaway.
+                *x = obstacles.stop(*x, to, &mut DVec2::new(0.0, 0.0));
             });
     }
 }
@@ -440,6 +444,7 @@ mod tests {
             periodic,
         });
         world.insert_resource(Boundaries(walls));
+        world.insert_resource(Obstacles::default());
         world.insert_resource(DeltaCorrection::default());
         world.insert_resource(SpacingScratch::default());
         for b in bodies {

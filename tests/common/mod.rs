@@ -93,3 +93,29 @@ impl Rng {
         regolith::glam::DVec2::new(self.next(), self.next())
     }
 }
+
+/// Least-squares acceleration of x(t) = x0 + v0 t + a t^2 / 2 (normal equations solved by
+/// Cramer's rule).
+pub fn fitted_acceleration(t: &[f64], x: &[f64]) -> f64 {
+    let mut m = [[0.0; 3]; 3];
+    let mut r = [0.0; 3];
+    for (&ti, &xi) in t.iter().zip(x) {
+        let row = [1.0, ti, 0.5 * ti * ti];
+        for (i, ri) in row.iter().enumerate() {
+            r[i] += ri * xi;
+            for (j, rj) in row.iter().enumerate() {
+                m[i][j] += ri * rj;
+            }
+        }
+    }
+    let det = |a: [[f64; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let mut third = m;
+    for i in 0..3 {
+        third[i][2] = r[i];
+    }
+    det(third) / det(m)
+}

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::body::Points;
 use crate::grid::GridGeometry;
+use crate::obstacle::Obstacles;
 
 use crate::resources::{Boundaries, Clock, Side, Wall, Walls};
 use crate::stress::Stress;
@@ -23,12 +24,17 @@ pub fn point_density(mut bodies: Query<&mut Points>) {
     }
 }
 
-/// The box the walls keep points in: a `Slip`, `NoSlip` or `Open` side bounds it, a `Free` or
+/// The box the walls keep points in: a `Slip`, `NoSlip`, `Frictional` or `Open` side bounds it, a `Free` or
 /// periodic one does not (a point past a free side stops the run; periodic sides wrap).
 /// Segments are not looked at: the box is what the sides' own conditions bound.
 pub(crate) fn kept_box(grid: &GridGeometry, w: &Walls) -> (DVec2, DVec2) {
     let (lo, hi) = (grid.origin, grid.max());
-    let kept = |wall: Wall| matches!(wall, Wall::Slip | Wall::NoSlip | Wall::Open);
+    let kept = |wall: Wall| {
+        matches!(
+            wall,
+            Wall::Slip | Wall::NoSlip | Wall::Frictional { .. } | Wall::Open
+        )
+    };
     let bound = |wall: Wall, at: f64, far: f64| if kept(wall) { at } else { far };
     let min = DVec2::new(
         bound(w.left, lo.x, f64::NEG_INFINITY),
@@ -49,17 +55,22 @@ pub(crate) fn kept_box(grid: &GridGeometry, w: &Walls) -> (DVec2, DVec2) {
 /// acceleration). A point crossing an `Open` side is retired: parked on the boundary with
 /// no mass, velocity or stress, and a negligible volume, so it no longer takes part. Past a
 /// `Free` side a point leaves, and the health check stops the run. Where a side has segments
-/// the condition is the one at the place the point crosses it.
+/// the condition is the one at the place the point crosses it. A point whose move ends inside
+/// an obstacle is stopped where its path enters it (`Obstacles::stop`).
 pub fn advect_points(
     grid: Res<GridGeometry>,
     clock: Res<Clock>,
     walls: Res<Boundaries>,
+    obstacles: Res<Obstacles>,
     mut bodies: Query<&mut Points>,
 ) {
     let (dt, grid) = (clock.dt, &*grid);
     let w = &walls.0;
+    let obstacles = &*obstacles;
     if !w.segments.is_empty() {
-        return move_points(&mut bodies, grid, dt, |p| cross_segments(grid, w, p));
+        return move_points(&mut bodies, grid, dt, obstacles, |p| {
+            cross_segments(grid, w, p)
+        });
     }
     let (min, max) = kept_box(grid, w);
     // Per axis: whether leaving through the low / high side retires the point.
@@ -67,7 +78,7 @@ pub fn advect_points(
         [w.left == Wall::Open, w.right == Wall::Open],
         [w.bottom == Wall::Open, w.top == Wall::Open],
     ];
-    move_points(&mut bodies, grid, dt, |p| {
+    move_points(&mut bodies, grid, dt, obstacles, |p| {
         *p.x = p.moved.clamp(min, max);
         for a in 0..2 {
             let (below, above) = (p.moved[a] < min[a], p.moved[a] > max[a]);
@@ -105,12 +116,13 @@ impl Moving<'_> {
 }
 
 /// Moves every live point of every body by `dt` times its advection velocity, updates its
-/// volume, and hands it to `walls` to place it (set `x`) against the sides; retired points
-/// stay parked.
+/// volume, hands it to `walls` to place it (set `x`) against the sides, then stops it at the
+/// obstacles; retired points stay parked.
 fn move_points(
     bodies: &mut Query<&mut Points>,
     grid: &GridGeometry,
     dt: f64,
+    obstacles: &Obstacles,
     walls: impl Fn(&mut Moving) + Send + Sync,
 ) {
     for mut points in bodies.iter_mut() {
@@ -134,7 +146,8 @@ fn move_points(
                     *t = Stress::ZERO;
                     return;
                 }
-                let moved = grid.wrap(*x + dt * adv);
+                let from = *x;
+                let moved = grid.wrap(from + dt * adv);
                 *vol *= exp_of_increment(dt * (l.x_axis.x + l.y_axis.y));
                 walls(&mut Moving {
                     moved,
@@ -144,6 +157,9 @@ fn move_points(
                     m,
                     t,
                 });
+                if !obstacles.is_empty() && *m != 0.0 {
+                    *x = obstacles.stop(from, *x, v);
+                }
             });
     }
 }
@@ -165,7 +181,7 @@ fn cross_segments(grid: &GridGeometry, w: &Walls, p: &mut Moving) {
                 p.retire();
                 return;
             }
-            Wall::Slip | Wall::NoSlip => {
+            Wall::Slip | Wall::NoSlip | Wall::Frictional { .. } => {
                 kept[a] = if below { lo[a] } else { hi[a] };
                 if (below && p.v[a] < 0.0) || (above && p.v[a] > 0.0) {
                     p.v[a] = 0.0;

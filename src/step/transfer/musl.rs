@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
+use crate::obstacle::Obstacles;
 use crate::step::grid_update::apply_walls;
 use crate::step::locate::Location;
 
@@ -41,6 +42,7 @@ pub fn musl_velocity(mut bodies: VelocityUpdate) {
 pub fn musl_remap(
     grid: Res<GridGeometry>,
     walls: Res<Boundaries>,
+    obstacles: Res<Obstacles>,
     mut bodies: Query<(&Points, &Location, &mut GridField)>,
 ) {
     for (points, location, mut field) in &mut bodies {
@@ -58,7 +60,7 @@ pub fn musl_remap(
                 DVec2::ZERO
             };
         }
-        apply_walls(&grid, &walls.0, field, None);
+        apply_walls(&grid, &walls.0, &obstacles, field, None);
     }
 }
 
