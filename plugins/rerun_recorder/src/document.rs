@@ -6,14 +6,12 @@ use std::path::Path;
 
 use regolith::body::{Body, BodyState, PointStates, Points};
 use regolith::grid::{GridField, GridGeometry};
-use rerun::RecordingStream;
 use rerun::blueprint::components::PlayState;
 use rerun::blueprint::{
     Blueprint, ContainerLike, Horizontal, Spatial2DView, Tabs, TextDocumentView, TimePanel,
     TimeSeriesView, Vertical,
 };
-
-use crate::record::domain_outline;
+use rerun::{LineStrips2D, RecordingStream};
 
 type BodyRow<'a> = (
     &'a Body,
@@ -122,6 +120,19 @@ pub fn log_setup(
         let _ = write!(md, "\n# Scene\n\n```ron\n{text}\n```\n");
     }
     let _ = stream.log_static("scene", &rerun::TextDocument::from_markdown(md));
+}
+
+/// The domain's outline, logged once.
+fn domain_outline(grid: &GridGeometry) -> LineStrips2D {
+    let (lo, hi) = (grid.origin, grid.max());
+    let corners = [
+        [lo.x as f32, lo.y as f32],
+        [hi.x as f32, lo.y as f32],
+        [hi.x as f32, hi.y as f32],
+        [lo.x as f32, hi.y as f32],
+        [lo.x as f32, lo.y as f32],
+    ];
+    LineStrips2D::new([corners]).with_colors([[0u8, 0, 0, 255]])
 }
 
 #[cfg(test)]

@@ -25,9 +25,7 @@ use regolith::grid::{GridField, GridGeometry};
 use regolith::output::{OutputFaults, RunDir};
 use regolith::resources::{Clock, OutputClock};
 use rerun::sink::{BinaryStreamSink, BinaryStreamStorage};
-use rerun::{
-    AnyValues, Arrows2D, LineStrips2D, Points2D, RecordingStream, RecordingStreamBuilder, Scalars,
-};
+use rerun::{AnyValues, Arrows2D, Points2D, RecordingStream, RecordingStreamBuilder, Scalars};
 use serde::{Deserialize, Serialize};
 
 use crate::Rerun;
@@ -412,17 +410,4 @@ fn log_grid(stream: &RecordingStream, grid: &GridGeometry, body: &Body, f: &Grid
             .with_radii([0.1 * grid.cell_size as f32]),
     );
     log(&format!("{at}/mass"), stream, &per_point("mass", &masses));
-}
-
-/// The domain's outline, logged once.
-pub fn domain_outline(grid: &GridGeometry) -> LineStrips2D {
-    let (lo, hi) = (grid.origin, grid.max());
-    let corners = [
-        [lo.x as f32, lo.y as f32],
-        [hi.x as f32, lo.y as f32],
-        [hi.x as f32, hi.y as f32],
-        [lo.x as f32, hi.y as f32],
-        [lo.x as f32, lo.y as f32],
-    ];
-    LineStrips2D::new([corners]).with_colors([[0u8, 0, 0, 255]])
 }
