@@ -169,7 +169,7 @@ fn bad_scenes_give_their_messages() {
         (
             6,
             "    walls: (left: Slip, right: Slip, bottom: NoSlip, top: Free),\n    obstacles: [(shape: Rectangle(min: (0.0, 0.51), max: (0.15, 0.52)), wall: Slip)],",
-            "obstacle 0 (Rectangle) holds no grid node (cell size 0.1 m)",
+            "obstacle 0 (Rectangle) holds no grid node (cell size 0.1 m): material would pass through it; make it at least a cell thick",
             Some(7),
         ),
         (

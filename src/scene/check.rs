@@ -372,7 +372,8 @@ impl Scene {
             }
             if Obstacles::nodes_inside(&*o.shape.0, &grid).is_empty() {
                 return Err(format!(
-                    "{which} holds no grid node (cell size {} m): material would pass                      through it; make it at least a cell thick",
+                    "{which} holds no grid node (cell size {} m): material would pass \
+                     through it; make it at least a cell thick",
                     grid.cell_size
                 ));
             }
