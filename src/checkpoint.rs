@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::carry::{Carried, Partial};
 use crate::diagnostics::EnergyLimit;
-use crate::output::Seconds;
+use crate::format::Seconds;
 use crate::output::write_atomic;
 use crate::resources::{Clock, OutputClock, StepRule};
 use crate::scene::Scene;

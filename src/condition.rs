@@ -14,14 +14,14 @@ use crate::carry::Carried;
 use crate::output::summary::Section;
 use crate::plugin::Install;
 use crate::registry::DynItem;
-use crate::scene::Scene;
+use crate::scene_view::SceneView;
 
 /// A condition: an [`Item`](crate::registry::Item) (its scene name and parameter checks)
 /// that implements this, registered with `app.register::<dyn Condition, YourType>()`.
 pub trait Condition: DynItem {
     /// What must hold between the condition and the rest of the scene (e.g. that the body it
     /// names exists); `check` reports a failure at the condition's line. By default nothing.
-    fn check_scene(&self, _scene: &Scene) -> Result<(), String> {
+    fn check_scene(&self, _scene: &SceneView) -> Result<(), String> {
         Ok(())
     }
     /// Adds the condition's resources and systems.
@@ -31,7 +31,7 @@ pub trait Condition: DynItem {
         Section::default()
     }
     /// What the condition carries across a checkpoint (`crate::carry`), as
-    /// [`Output::save`](crate::output::Output::save): by default it says it cannot, and a
+    /// `Output::save`: by default it says it cannot, and a
     /// resumed run is marked partial.
     fn save(&self, _world: &World) -> Carried {
         Carried::Lost(format!(
@@ -48,4 +48,4 @@ pub trait Condition: DynItem {
     }
 }
 
-crate::item_kind!(Condition, "condition");
+item_kind!(Condition, "condition");

@@ -81,7 +81,7 @@ pub enum Error {
     /// A signal asked the run to stop; it finished its step and saved its state.
     #[error(
         "interrupted at t = {} s; summary.json says `interrupted` and checkpoint.bin holds the state: `regolith resume {}` continues the run",
-        crate::output::Seconds(*time),
+        crate::format::Seconds(*time),
         dir.display()
     )]
     Interrupted { time: f64, dir: std::path::PathBuf },

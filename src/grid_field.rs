@@ -18,7 +18,7 @@
 //! 3. [`gather_active`]: the result interpolated back to each point with its footprint (over
 //!    the active nodes, renormalised), into a
 //!    column of the body's [`PointFields`], which the constitutive update hands to
-//!    [`crate::material::Material::update`] as `PointStep::fields`.
+//!    `Material::update` (module `material`) as `PointStep::fields`.
 //!
 //! Where they run depends on what the field's law reads. A law of the point state at the
 //! start of the step runs in the `ParticleToGrid` set, after its core systems: the footprints
@@ -28,8 +28,8 @@
 //! are still the start of the step's (the velocity gradient was gathered with them), but the
 //! bands have been rebuilt for the moved points, so such a field scatters with the bands kept
 //! from the start of the step ([`StartBands`]). A material declares the
-//! columns it reads ([`crate::material::Material::point_fields`]) and adds the systems that
-//! fill them ([`crate::material::Material::add_field_systems`]).
+//! columns it reads (`Material::point_fields`) and adds the systems that
+//! fill them (`Material::add_field_systems`).
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;

@@ -8,14 +8,20 @@
 //! plugins ([`plugin::Plugin`]) named in RON scene files ([`scene::Scene`]).
 //! See ARCHITECTURE.md for the layout and docs/scenes.md for the scene format.
 
+// First, so that its `item_kind!` macro is in scope in every module below (each item kind
+// declares itself with it); plugins name it `regolith::item_kind!`.
+#[macro_use]
+pub mod registry;
 pub mod body;
 pub mod carry;
 pub mod checkpoint;
 pub mod condition;
 pub mod contact;
+pub mod defaults;
 pub mod diagnostics;
 pub mod error;
 pub mod fill;
+pub mod format;
 pub mod geometry;
 pub mod grid;
 pub mod grid_field;
@@ -24,10 +30,10 @@ pub mod material;
 pub mod obstacle;
 pub mod output;
 pub mod plugin;
-pub mod registry;
 pub mod resources;
 pub mod run;
 pub mod scene;
+mod scene_view;
 pub mod shape_functions;
 pub mod sim;
 pub mod step;
@@ -38,6 +44,7 @@ pub mod velocity;
 pub use bevy_ecs;
 pub use glam;
 
-pub use plugin::{DefaultPlugins, Plugin, Regolith};
+pub use defaults::DefaultPlugins;
+pub use plugin::{Plugin, Regolith};
 pub use scene::Scene;
 pub use sim::Simulation;

@@ -3,10 +3,13 @@
 //! A [`Plugin`] receives the [`Regolith`] being assembled and adds to it: scene items of any
 //! kind ([`Regolith::register`]: materials, shapes, outputs, conditions, or a kind of the
 //! plugin's own), systems for a named step set ([`Regolith::add_systems`]) and resources
-//! ([`Regolith::insert_resource`]). A scene is parsed against the result and carries it
-//! ([`Scene::registries`](crate::scene::Scene)), so a simulation built from the scene runs the
-//! systems its plugins added. The built-in items come in [`DefaultPlugins`] and register
-//! exactly as a user's plugin would.
+//! ([`Regolith::insert_resource`]). A scene is parsed against the result and carries it (the
+//! scene's `registries`), so a simulation built from the scene runs the systems its plugins
+//! added. The built-in items come in `DefaultPlugins` (module `defaults`, above every item)
+//! and register exactly as a user's plugin would.
+//!
+//! This module sits below the items: an item installs itself through [`Install`], and nothing
+//! here names an item.
 
 use std::sync::Arc;
 
@@ -14,80 +17,19 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleConfigs;
 use bevy_ecs::system::ScheduleSystem;
 
-use crate::contact::{Contact, Frictional, NoSlip};
-use crate::error::SceneError;
-use crate::geometry::Shape;
-use crate::geometry::builtin::{Disc, Polygon, Rectangle};
-use crate::geometry::intruder::TippedIntruder;
-use crate::material::MaterialSpec;
-use crate::material::elastic::LinearElastic;
-use crate::material::granular::{DruckerPrager, MuI};
-use crate::material::nonlocal::Nonlocal;
-use crate::output::Output;
-use crate::output::discharge::Discharge;
-use crate::output::flow_field::FlowField;
-use crate::output::free_surface::FreeSurface;
-use crate::output::front::PressureFront;
-use crate::output::impact::Impact;
-use crate::output::profile::VelocityProfile;
-use crate::output::runout::Runout;
-use crate::output::snapshots::Snapshots;
-use crate::output::vtk::Vtk;
 use crate::registry::{IntoKind, Item, Kind, Registries};
-use crate::scene::Scene;
-use crate::shape_functions::{CpdiFixed, Linear, QuadraticBspline, ShapeFunctions};
 use crate::step::{Core, StepSet};
-use crate::velocity::{AffineFlip, Apic, Flip, Transfer};
 
 /// Something that adds scene items, systems or resources to regolith.
 pub trait Plugin {
     fn build(&self, app: &mut Regolith);
 }
 
-/// The built-in materials, shapes, outputs, shape functions, contact laws and transfers.
-pub struct DefaultPlugins;
-
-impl Plugin for DefaultPlugins {
-    fn build(&self, app: &mut Regolith) {
-        app.register::<dyn MaterialSpec, LinearElastic>()
-            .register::<dyn MaterialSpec, MuI>()
-            .register::<dyn MaterialSpec, DruckerPrager>()
-            .register::<dyn MaterialSpec, Nonlocal>()
-            .register::<dyn Shape, Rectangle>()
-            .register::<dyn Shape, Disc>()
-            .register::<dyn Shape, Polygon>()
-            .register::<dyn Shape, TippedIntruder>()
-            .register::<dyn Output, Snapshots>()
-            .register::<dyn Output, Vtk>()
-            .register::<dyn Output, Impact>()
-            .register::<dyn Output, PressureFront>()
-            .register::<dyn Output, FlowField>()
-            .register::<dyn Output, FreeSurface>()
-            .register::<dyn Output, Discharge>()
-            .register::<dyn Output, Runout>()
-            .register::<dyn Output, VelocityProfile>()
-            .register::<dyn ShapeFunctions, Linear>()
-            .register::<dyn ShapeFunctions, CpdiFixed>()
-            .register::<dyn ShapeFunctions, QuadraticBspline>()
-            .register::<dyn Contact, NoSlip>()
-            .register::<dyn Contact, Frictional>()
-            .register::<dyn Transfer, Flip>()
-            .register::<dyn Transfer, Apic>()
-            .register::<dyn Transfer, AffineFlip>();
-    }
-}
-
 /// The set of plugins a program uses, being assembled; [`Regolith::registries`] freezes it
-/// for parsing scenes.
+/// for parsing scenes. `Regolith::default()` starts from the built-in items
+/// (`DefaultPlugins`), [`Regolith::empty`] from none.
 pub struct Regolith {
     registries: Registries,
-}
-
-impl Default for Regolith {
-    /// With [`DefaultPlugins`].
-    fn default() -> Self {
-        Regolith::empty().add_plugin(DefaultPlugins)
-    }
 }
 
 impl Regolith {
@@ -180,9 +122,4 @@ fn after_core<M>(
     systems: impl IntoScheduleConfigs<ScheduleSystem, M>,
 ) -> ScheduleConfigs<ScheduleSystem> {
     systems.in_set(set).after(Core(set))
-}
-
-/// Parses scene text against the default plugins (a convenience for tests and examples).
-pub fn parse_scene(text: &str) -> Result<Scene, SceneError> {
-    Scene::parse(text, "<scene>", &Regolith::default().registries())
 }

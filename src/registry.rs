@@ -4,7 +4,7 @@
 //! the plugins added, so items cannot be a closed serde enum. An item is a parameter type
 //! ([`Item`]: its scene name and its checks) that implements the trait of its kind (a
 //! [`Kind`]: `dyn Shape`, `dyn Output`, `dyn Condition`, `dyn MaterialSpec`, ...). A plugin
-//! registers it with [`crate::Regolith::register`], which files a constructor under
+//! registers it with `Regolith::register` (module `plugin`), which files a constructor under
 //! the item's name in the catalogue of that kind; any kind, built-in or a plugin's own, goes
 //! through the same code.
 //!
@@ -57,13 +57,13 @@ impl<T: Item> DynItem for T {
 }
 
 /// A kind of scene item: the trait object its catalogue holds (`dyn Shape`, ...).
-/// Declared with [`item_kind!`](crate::item_kind).
+/// Declared with `item_kind!` (below).
 pub trait Kind: DynItem + 'static {
     /// What the kind is called in messages ("material", "shape", ...).
     const KIND: &'static str;
 }
 
-/// Conversion of an item into its kind's trait object (written by [`item_kind!`](crate::item_kind)
+/// Conversion of an item into its kind's trait object (written by `item_kind!` (below)
 /// for every type implementing the kind's trait).
 pub trait IntoKind<K: ?Sized> {
     fn into_kind(self) -> Box<K>;
@@ -126,7 +126,7 @@ type AddResource = Arc<dyn Fn(&mut World) + Send + Sync>;
 
 /// What the plugins of a program registered: a catalogue of items per kind, which the scene
 /// format consults, and the systems and resources every simulation gets. Scenes carry the
-/// registries they were parsed against ([`crate::Scene::registries`]).
+/// registries they were parsed against (the scene's `registries`).
 #[derive(Default)]
 pub struct Registries {
     catalogs: BTreeMap<TypeId, Box<dyn Any + Send + Sync>>,

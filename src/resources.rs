@@ -10,7 +10,6 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::output::Interval;
 use crate::velocity::Transfer;
 
 /// Simulated time and the step count.
@@ -61,6 +60,32 @@ impl StepRule {
             dt_max: 0.0,
             cfl_max: 0.0,
         }
+    }
+}
+
+/// A fixed output interval in simulated time: due at t = 0, then every `every` seconds, and
+/// at the last step.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Interval {
+    pub every: f64,
+    next: f64,
+}
+
+impl Interval {
+    pub fn new(every: f64) -> Self {
+        Interval { every, next: 0.0 }
+    }
+
+    /// Whether an output is due now (and, if so, moves on to the next time).
+    pub fn due(&mut self, clock: &Clock) -> bool {
+        let eps = 1e-9 * self.every;
+        if !(clock.observing || clock.last_step || clock.time >= self.next - eps) {
+            return false;
+        }
+        while self.next <= clock.time + eps {
+            self.next += self.every;
+        }
+        true
     }
 }
 
@@ -230,4 +255,27 @@ pub enum Wall {
     Frictional { friction: f64 },
     /// Wraps to the opposite side (which must be periodic too).
     Periodic,
+}
+
+/// The update-stress-last variant (docs/numerics.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum StressUpdate {
+    /// `L` from the updated grid velocity `(mv)/m` (the paper's choice). With `Linear`
+    /// integration, nodes of tiny mass make it unstable (docs/numerics.md).
+    #[default]
+    Usl,
+    /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
+    /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
+    Musl,
+}
+
+/// How the volumetric part of the velocity gradient is taken (docs/numerics.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Dilatation {
+    /// Each point's own `tr L` (the paper's formulation).
+    PerPoint,
+    /// The volume-weighted mean `tr L` of the points in the point's cell; removes the
+    /// checkerboard pressure mode of several points per cell.
+    #[default]
+    CellAveraged,
 }

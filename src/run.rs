@@ -184,7 +184,7 @@ fn run_to_end(
             "interrupted",
             Some(format!(
                 "interrupted by a signal at t = {} s (trajectory.csv ends there); `regolith resume {}` continues the run",
-                crate::output::Seconds(sim.clock().time),
+                crate::format::Seconds(sim.clock().time),
                 out.display()
             )),
         ),
@@ -353,7 +353,7 @@ pub fn bytes_per_point(material: &dyn crate::material::MaterialSpec, affine: boo
 pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
     let nodes = sim.grid().node_count();
     let cells = sim.grid().cells[0] * sim.grid().cells[1];
-    let averaging = if scene.dilatation == crate::scene::Dilatation::CellAveraged {
+    let averaging = if scene.dilatation == crate::resources::Dilatation::CellAveraged {
         crate::step::CellDilatation::BYTES_PER_CELL * cells
     } else {
         0

@@ -61,7 +61,7 @@ pub trait ShapeFunctions: DynItem {
     fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions);
 }
 
-crate::item_kind!(ShapeFunctions, "shape-function scheme");
+item_kind!(ShapeFunctions, "shape-function scheme");
 
 impl<S: Scheme> ShapeFunctions for S {
     fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions) {

@@ -13,9 +13,10 @@ use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::obstacle::Obstacles;
 use crate::output::trajectory::Trajectory;
-use crate::output::{Interval, OutputFaults, RunDir};
+use crate::output::{OutputFaults, RunDir};
 use crate::plugin::Install;
-use crate::scene::{BodySpec, Dilatation, InitialStress, Scene};
+use crate::resources::{Dilatation, Interval};
+use crate::scene::{BodySpec, InitialStress, Scene};
 use crate::step::{self, Timings};
 use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
@@ -101,7 +102,7 @@ impl Simulation {
     }
 
     /// The simulation of `scene` before its t = 0 outputs: what a checkpoint restores into
-    /// ([`crate::checkpoint::Checkpoint::restore`]). Observing t = 0 would have the outputs
+    /// (`Checkpoint::restore`). Observing t = 0 would have the outputs
     /// record, and open their files for, a state that the checkpoint then replaces (the
     /// Rerun recorder would start its file afresh).
     pub fn unobserved(scene: &Scene) -> Simulation {

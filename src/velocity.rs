@@ -24,7 +24,7 @@ pub trait Transfer: DynItem {
     }
 }
 
-crate::item_kind!(Transfer, "transfer");
+item_kind!(Transfer, "transfer");
 
 /// FLIP (the paper's transfer): each point keeps its velocity and adds the grid's
 /// acceleration, optionally blended with PIC by `flip` at every step, a damping whose size is

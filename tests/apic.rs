@@ -14,9 +14,9 @@ mod common;
 
 use common::Rng;
 use regolith::Simulation;
+use regolith::defaults::parse_scene;
 use regolith::glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::plugin::parse_scene;
 use regolith::shape_functions::{CpdiFixed, Footprint, Linear, QuadraticBspline, Scheme};
 use regolith::step::transfer::apic_gather;
 

@@ -3,7 +3,7 @@
 mod common;
 
 use regolith::checkpoint::Checkpoint;
-use regolith::plugin::parse_scene;
+use regolith::defaults::parse_scene;
 use regolith::{Scene, Simulation};
 
 /// A granular bed with an elastic disc falling into it, frictional contact: every kind of

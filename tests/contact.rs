@@ -8,8 +8,8 @@ mod property;
 use proptest::prelude::*;
 use regolith::Simulation;
 use regolith::contact::{NodeBody, frictional_impulses};
+use regolith::defaults::parse_scene;
 use regolith::glam::DVec2;
-use regolith::plugin::parse_scene;
 
 fn vec2() -> impl Strategy<Value = DVec2> {
     (-10.0f64..10.0, -10.0f64..10.0).prop_map(|(x, y)| DVec2::new(x, y))

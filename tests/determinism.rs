@@ -136,7 +136,7 @@ fn small_body(walls: &str, rows: usize) -> regolith::Scene {
         w = 12.0 * h,
         ht = rows as f64 * h,
     );
-    regolith::plugin::parse_scene(&text).unwrap_or_else(|e| panic!("{e}"))
+    regolith::defaults::parse_scene(&text).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn small_body_hash(pool: &rayon::ThreadPool, scene: &regolith::Scene) -> u64 {

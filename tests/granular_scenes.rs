@@ -144,7 +144,7 @@ fn deepest_flowing(sim: &mut Simulation, strip: f64) -> f64 {
 /// the pile's surface and loose pockets.
 #[test]
 fn thrown_grains_disconnect_and_re_densify_on_landing() {
-    let scene = regolith::plugin::parse_scene(
+    let scene = regolith::defaults::parse_scene(
         r#"(
         name: "throw",
         domain: (size: (0.3, 0.5), cells: (30, 50)),
@@ -217,7 +217,7 @@ fn thrown_grains_disconnect_and_re_densify_on_landing() {
 /// Measured: zero crossing at 0.374 ms (`H / c` = 0.365 ms), 0.91 m/s upward at 2 ms.
 #[test]
 fn a_dropped_layer_bounces_off_the_floor_like_an_elastic_rod() {
-    let scene = regolith::plugin::parse_scene(
+    let scene = regolith::defaults::parse_scene(
         r#"(
         name: "drop",
         domain: (size: (0.1, 0.3), cells: (10, 30)),

@@ -15,7 +15,7 @@ mod common;
 
 use common::Rng;
 use regolith::Simulation;
-use regolith::plugin::parse_scene;
+use regolith::defaults::parse_scene;
 use regolith::shape_functions::{CpdiFixed, Footprint};
 
 /// p-wave speed of the block's material: E = 1 MPa, nu = 0.3, rho = 1000 kg/m^3.

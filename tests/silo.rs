@@ -110,7 +110,7 @@ fn a_nonlocal_silo_drains_through_its_orifice() {
 /// out in 0.2 s.
 #[test]
 fn a_side_outlet_retires_only_what_crosses_it() {
-    let scene = regolith::plugin::parse_scene(
+    let scene = regolith::defaults::parse_scene(
         r#"(
         name: "outlet",
         domain: (size: (0.2, 0.2), cells: (20, 20)),

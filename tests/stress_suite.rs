@@ -1,7 +1,7 @@
 //! The stress suite: each extreme case either runs to completion with bounded, finite
 //! results or stops with a clear message; never a panic, a hang or a NaN in the output.
 
-use regolith::plugin::parse_scene;
+use regolith::defaults::parse_scene;
 use regolith::{Scene, Simulation};
 
 /// A PS-1 bed with an elastic disc intruder; `{..}` placeholders are filled per case.

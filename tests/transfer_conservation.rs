@@ -14,8 +14,8 @@ mod common;
 
 use common::Rng;
 use regolith::Simulation;
+use regolith::defaults::parse_scene;
 use regolith::glam::DVec2;
-use regolith::plugin::parse_scene;
 use regolith::stress::Stress;
 
 /// `transfer` is the scene's transfer setting, e.g. `Apic` or `Flip, flip: 0.0`.

@@ -8,7 +8,8 @@ use regolith::registry::Registries;
 use regolith::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
 use regolith::scene::{InitialStress, Scene, TimeStep};
 use regolith::sim::{Clock, Simulation};
-use regolith_lab::plan::{BatchFile, Layout, SlurmOptions, write_plan};
+use regolith_lab::batch::BatchFile;
+use regolith_lab::plan::{Layout, SlurmOptions, write_plan};
 use regolith_lab::workers::run_local;
 
 use crate::args::{BatchArgs, SlurmArgs, parse_depths};
@@ -44,7 +45,7 @@ pub(crate) fn run(
         use regolith_lab::claim::{Claimed, claim as take};
         // Done: completed from this very scene text (a changed scene is run again).
         let done = || {
-            regolith_lab::sweep::read_summary(&out).is_some_and(|s| s["status"] == "completed")
+            regolith_lab::batch::read_summary(&out).is_some_and(|s| s["status"] == "completed")
                 && std::fs::read_to_string(out.join("scene.ron")).is_ok_and(|t| t == text)
         };
         match take(&out, done)

@@ -40,7 +40,7 @@ pub(crate) fn report(summary: &Summary, out: &Path) {
         "{}: {} steps to t = {} s, {} points, {:.1} s wall, {:.3e} particle-steps/s, max CFL {:.3}; outputs in {}",
         summary.scene,
         summary.steps,
-        regolith::output::Seconds(summary.time),
+        regolith::format::Seconds(summary.time),
         summary.particles,
         summary.wall_s,
         summary.particle_steps_per_s,

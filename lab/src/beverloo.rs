@@ -20,8 +20,8 @@ use std::sync::Arc;
 use regolith::registry::Registries;
 use regolith::scene::{Scene, Side, Wall};
 
+use crate::batch::read_summary;
 use crate::figures::plot::{self, Series};
-use crate::sweep::read_summary;
 
 /// Gravity's magnitude in the law (m/s^2): the shipped silos' `gravity` (the default).
 const G: f64 = 9.81;

@@ -160,7 +160,7 @@ mod tests {
     fn one_claim_at_a_time_and_a_dead_holder_is_replaced() {
         let dir = tempfile::tempdir().unwrap();
         let run = dir.path().join("run_0001");
-        let done = || crate::sweep::read_summary(&run).is_some_and(|s| s["status"] == "completed");
+        let done = || crate::batch::read_summary(&run).is_some_and(|s| s["status"] == "completed");
         let claim = |run: &Path| claim(run, done);
         let first = claim(&run).unwrap();
         assert!(matches!(first, Claimed::Mine(_)), "{first:?}");

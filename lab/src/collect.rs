@@ -9,42 +9,10 @@
 
 use std::path::Path;
 
-use crate::plan::{PlanFile, digest, read_plan};
-use crate::sweep::read_summary;
+use crate::batch::{PlanFile, RunState, State, read_summary};
+use crate::plan::{digest, read_plan};
+use crate::study::Study;
 use regolith::error::{Error, SceneError};
-
-/// Where a planned run stands.
-#[derive(Clone, Debug, PartialEq)]
-pub enum State {
-    Completed,
-    /// Failed, with why (its summary's `failure`, or the worker's error).
-    Failed(String),
-    /// Not started, or running.
-    Pending,
-}
-
-/// One planned run as found on disk.
-#[derive(Clone, Debug)]
-pub struct RunState {
-    /// Relative to the plan directory.
-    pub dir: String,
-    /// The varied values, as planned.
-    pub values: Vec<String>,
-    pub state: State,
-    /// Its `summary.json` when it completed or failed, else `Null`.
-    pub summary: serde_json::Value,
-}
-
-impl RunState {
-    /// `completed`, `failed` or `pending`, as the tables print it.
-    pub fn status(&self) -> &'static str {
-        match self.state {
-            State::Completed => "completed",
-            State::Failed(_) => "failed",
-            State::Pending => "pending",
-        }
-    }
-}
 
 /// Why a run whose scene differs from its plan is not collected.
 const CHANGED: &str = "its scene.ron was changed or removed after planning";
@@ -122,6 +90,7 @@ pub fn collect_plan(
             "sweep.csv"
         }
         Some(study) => {
+            let study = Study::planned(study, &dir.join("plan.json").display().to_string())?;
             let (planned, entries) = study.plan();
             if planned.len() != runs.len() {
                 return Err(SceneError::file(
@@ -134,7 +103,7 @@ pub fn collect_plan(
                 )
                 .into());
             }
-            crate::study::write_tables(study, &runs, &entries, dir)?;
+            crate::study::write_tables(&study, &runs, &entries, dir)?;
             "study.md"
         }
     };

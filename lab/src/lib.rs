@@ -7,6 +7,7 @@
 //! scene and writes its files; everything here only reads scenes, runs them through
 //! [`regolith::run`] and reads their outputs back.
 
+pub mod batch;
 pub mod beverloo;
 pub mod claim;
 pub mod collect;

@@ -23,43 +23,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
-use crate::study::Study;
-use crate::sweep::{Planned, read_summary};
+use crate::batch::{BatchFile, PlanFile, Planned, PlannedRun, read_summary};
 use regolith::error::{Error, SceneError};
 use regolith::output::write_atomic;
 use regolith::registry::Registries;
 use regolith::scene::Scene;
-
-/// `plan.json`.
-#[derive(Debug, Serialize, Deserialize)]
-pub struct PlanFile {
-    /// `sweep` or `study`: which table `--collect` writes.
-    pub kind: String,
-    pub name: String,
-    /// The varied keys of a sweep, in its order (the table's parameter columns); empty
-    /// for a study.
-    pub keys: Vec<String>,
-    pub runs: Vec<PlannedRun>,
-    /// The study file as planned (a study's tables need its knobs and reference).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub study: Option<Study>,
-}
-
-/// One run of a plan.
-#[derive(Debug, Serialize, Deserialize)]
-pub struct PlannedRun {
-    /// The run's directory relative to the plan: `runs/run_NNNN` (a plan), `run_NNNN` (a
-    /// local sweep's output directory).
-    pub dir: String,
-    /// The varied values, in the order of `keys` (a study: the knob and the value).
-    pub values: Vec<String>,
-    /// FNV-1a digest of the run's `scene.ron`, 16 hex digits.
-    pub scene_digest: String,
-    /// Estimated wall time on one thread (s).
-    pub estimated_s: f64,
-}
 
 /// Where a plan puts its runs: under `runs/` in a plan directory, at the top of a local
 /// command's output directory (as earlier versions did, so their runs are found again).
@@ -130,36 +98,6 @@ fn estimate(scene: &Scene) -> f64 {
     steps * sim.particle_count() as f64 / ASSUMED_RATE
 }
 
-/// A file of runs of one scene with different overrides: a sweep or a study. What the
-/// local commands, `--plan` and `--collect` need of it.
-pub trait BatchFile: Sized + serde::de::DeserializeOwned {
-    /// `sweep` or `study`: the command, and `plan.json`'s kind.
-    const KIND: &'static str;
-    /// The table a finished batch is read from, in its directory.
-    const TABLE: &'static str;
-    /// Reads the file at `path` and checks it; errors name the file (and line).
-    fn load(path: &Path) -> Result<Self, SceneError> {
-        let (batch, origin) = crate::sweep::load_batch_file(path, Self::KIND, Self::jobs)?;
-        batch.validate(&origin)?;
-        Ok(batch)
-    }
-    /// Refuses what parses but cannot be run (`origin` names the file in messages).
-    fn validate(&self, origin: &str) -> Result<(), SceneError>;
-    fn name(&self) -> &str;
-    /// The scene file, relative to the batch file.
-    fn scene(&self) -> &str;
-    /// Runs at once the file asks for.
-    fn jobs(&self) -> Option<usize>;
-    /// The runs, in order.
-    fn runs(&self) -> Vec<Planned>;
-    /// `plan.json` without its runs.
-    fn head(&self) -> PlanFile;
-    /// Refuses a batch that cannot give its results, before anything is written.
-    fn check(&self, _path: &Path, _registries: &std::sync::Arc<Registries>) -> Result<(), Error> {
-        Ok(())
-    }
-}
-
 /// Writes the plan of `batch` (read from `path`) into `dir` and returns it: every run's
 /// resolved scene, then `plan.json`, `jobs.txt`, `slurm.sbatch` and `logs/`. Refuses
 /// (before writing anything) when a finished run in `dir` ran another scene than the one
@@ -173,7 +111,7 @@ pub fn write_plan(
     slurm: &SlurmOptions,
 ) -> Result<PlanFile, Error> {
     batch.check(path, registries)?;
-    let scene_path = crate::sweep::beside(path, batch.scene());
+    let scene_path = crate::batch::beside(path, batch.scene());
     let runs = batch.runs();
     let io = |what: &str, e| Error::io(format!("{}: cannot write {what}", dir.display()), e);
     let mut plan = batch.head();

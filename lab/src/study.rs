@@ -30,9 +30,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::collect::{RunState, State};
-use crate::plan::{BatchFile, PlanFile};
-use crate::sweep::{Planned, beside, field};
+use crate::batch::{BatchFile, PlanFile, Planned, RunState, State, beside, field};
 use regolith::error::{Error, SceneError};
 use regolith::output::write_atomic;
 use regolith::registry::Registries;
@@ -376,6 +374,15 @@ pub(crate) fn write_tables(
     Ok(())
 }
 
+impl Study {
+    /// The study a plan carries (`plan.json`'s `study`); `origin` names the plan in the
+    /// message when it is not one.
+    pub fn planned(value: &serde_json::Value, origin: &str) -> Result<Study, SceneError> {
+        Study::deserialize(value)
+            .map_err(|e| SceneError::file(origin, format!("its study is not a study: {e}")))
+    }
+}
+
 impl BatchFile for Study {
     const KIND: &'static str = "study";
     const TABLE: &'static str = "study.md";
@@ -412,7 +419,8 @@ impl BatchFile for Study {
             name: self.name.clone(),
             keys: Vec::new(),
             runs: Vec::new(),
-            study: Some(self.clone()),
+            // A study is plain data (names, numbers, overrides): it always converts.
+            study: serde_json::to_value(self).ok(),
         }
     }
 

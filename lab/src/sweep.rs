@@ -21,12 +21,11 @@
 //! continues where it stopped. `sweep.csv` is rewritten atomically after every run (the
 //! `collect` module).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::collect::{RunState, State};
-use crate::plan::{BatchFile, PlanFile};
+use crate::batch::{BatchFile, PlanFile, Planned, RunState, State, field};
 use regolith::error::SceneError;
 use regolith::output::write_atomic;
 
@@ -52,40 +51,6 @@ pub struct Sweep {
 pub struct Varied {
     pub key: String,
     pub values: Vec<String>,
-}
-
-/// Reads and parses a batch file (a sweep or a study; `what` names it in messages) and
-/// checks its `jobs`; returns it with the file's name for further messages.
-pub(crate) fn load_batch_file<T: serde::de::DeserializeOwned>(
-    path: &Path,
-    what: &str,
-    jobs: impl Fn(&T) -> Option<usize>,
-) -> Result<(T, String), SceneError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::file(&origin, format!("cannot read the {what}: {e}")))?;
-    let batch: T = regolith::scene::ron_options()
-        .from_str(&text)
-        .map_err(|e| {
-            SceneError::at(
-                &origin,
-                e.span.start.line,
-                e.span.start.col,
-                e.code.to_string(),
-            )
-        })?;
-    if jobs(&batch) == Some(0) {
-        return Err(SceneError::file(&origin, "jobs must be at least 1"));
-    }
-    Ok((batch, origin))
-}
-
-/// One run of the sweep: its directory name and overrides.
-#[derive(Clone, Debug)]
-pub struct Planned {
-    pub dir: String,
-    pub values: Vec<String>,
-    pub sets: Vec<String>,
 }
 
 impl Sweep {
@@ -126,21 +91,6 @@ impl Sweep {
                 }
             })
             .collect()
-    }
-}
-
-/// A run directory's `summary.json`, if it holds one that parses.
-pub fn read_summary(dir: &Path) -> Option<serde_json::Value> {
-    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
-    serde_json::from_str(&text).ok()
-}
-
-/// One CSV field, quoted when it holds a comma or a quote.
-pub(crate) fn field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
     }
 }
 
@@ -261,9 +211,4 @@ impl BatchFile for Sweep {
             study: None,
         }
     }
-}
-
-/// A path written in a batch file (its scene), taken relative to that file's directory.
-pub fn beside(file: &Path, relative: &str) -> PathBuf {
-    file.parent().unwrap_or(Path::new(".")).join(relative)
 }

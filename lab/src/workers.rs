@@ -10,10 +10,10 @@ use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::batch::{BatchFile, PlanFile, PlannedRun, read_summary};
 use crate::claim::{Claimed, claim};
 use crate::collect::collect_plan;
-use crate::plan::{BatchFile, Layout, PlanFile, PlannedRun, SlurmOptions, write_plan};
-use crate::sweep::read_summary;
+use crate::plan::{Layout, SlurmOptions, write_plan};
 use regolith::error::Error;
 use regolith::registry::Registries;
 use regolith::run::{CheckpointEvery, Provenance, run_scene};

@@ -40,20 +40,20 @@ fn every_run_of_every_shipped_sweep_and_study_loads() {
     let mut checked = 0;
     let mut check = |batch: &std::path::Path, scene: &str, sets: &[String]| {
         // Resolved as `regolith sweep` and `regolith study` resolve it.
-        let scene = regolith_lab::sweep::beside(batch, scene);
+        let scene = regolith_lab::batch::beside(batch, scene);
         Scene::load(&scene, sets, &registries)
             .unwrap_or_else(|e| panic!("{}: {e}", batch.display()));
         checked += 1;
     };
     for path in shipped("sweeps") {
-        let sweep = <regolith_lab::sweep::Sweep as regolith_lab::plan::BatchFile>::load(&path)
+        let sweep = <regolith_lab::sweep::Sweep as regolith_lab::batch::BatchFile>::load(&path)
             .unwrap_or_else(|e| panic!("{e}"));
         for run in sweep.plan() {
             check(&path, &sweep.scene, &run.sets);
         }
     }
     for path in shipped("studies") {
-        let study = <regolith_lab::study::Study as regolith_lab::plan::BatchFile>::load(&path)
+        let study = <regolith_lab::study::Study as regolith_lab::batch::BatchFile>::load(&path)
             .unwrap_or_else(|e| panic!("{e}"));
         for run in study.plan().0 {
             check(&path, &study.scene, &run.sets);

@@ -9,7 +9,7 @@ mod common;
 use std::sync::Mutex;
 
 use regolith::Regolith;
-use regolith_lab::plan::BatchFile;
+use regolith_lab::batch::BatchFile;
 use regolith_lab::study::Study;
 use regolith_lab::workers::run_local;
 

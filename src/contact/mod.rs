@@ -50,7 +50,7 @@ pub trait Contact: DynItem {
     fn install(&self, world: &mut World, schedule: &mut Schedule);
 }
 
-crate::item_kind!(Contact, "contact law");
+item_kind!(Contact, "contact law");
 
 /// One shared velocity at shared nodes (bodies stick together once they share a node).
 #[derive(Clone, Copy, Debug, Deserialize)]

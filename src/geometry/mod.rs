@@ -2,7 +2,7 @@
 //!
 //! Bodies are filled with material points on a lattice aligned with the grid; a shape only
 //! answers "is this position inside" and gives its bounding box. A shape used as a fixed
-//! obstacle (`crate::obstacle`) also gives the outward normal of its boundary, which every
+//! obstacle (module `obstacle`) also gives the outward normal of its boundary, which every
 //! shape has by default from `contains` alone and the built-in ones give exactly. Built-in
 //! shapes (rectangle, disc, polygon, the tipped intruder) register exactly as a user's would.
 
@@ -68,7 +68,7 @@ pub fn sampled_normal(contains: impl Fn(DVec2) -> bool, p: DVec2, reach: f64) ->
     DVec2::ZERO
 }
 
-crate::item_kind!(Shape, "shape");
+item_kind!(Shape, "shape");
 
 /// Checks that a value is a finite number, naming it in the message.
 pub fn finite(name: &str, v: f64) -> Result<(), String> {

@@ -121,7 +121,7 @@ pub trait MaterialSpec: DynItem {
     fn load_history(&self, world: &mut World, entity: Entity, bytes: &[u8]) -> Result<(), String>;
 }
 
-crate::item_kind!(MaterialSpec, "material");
+item_kind!(MaterialSpec, "material");
 
 impl<M: Material> MaterialSpec for M {
     fn density(&self) -> f64 {

@@ -23,12 +23,13 @@ use crate::carry::{Carried, carried, restored};
 use crate::linefit::{line_fit, slope_error};
 use crate::output::summary::Section;
 use crate::output::{
-    Interval, Output, OutputFaults, RunDir, check_every, due_points, points_of, series_csv,
-    write_or_fault,
+    Output, OutputFaults, RunDir, check_every, due_points, points_of, series_csv, write_or_fault,
 };
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
+use crate::resources::Interval;
+use crate::scene_view::SceneView;
 use crate::step::StepSet;
 
 #[derive(Clone, Debug, Deserialize)]
@@ -145,7 +146,7 @@ impl Output for Discharge {
         vec![&self.body]
     }
 
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+    fn check_scene(&self, scene: &SceneView) -> Result<(), String> {
         scene.body(&self.body)?;
         let grid = scene.grid();
         match self.height {

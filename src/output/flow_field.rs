@@ -17,7 +17,8 @@ use serde::Deserialize;
 
 use crate::body::{Body, BodyState, Points};
 use crate::carry::{Carried, carried, restored};
-use crate::output::{Instants, Num, Output, OutputFaults, RunDir, check_instants, write_or_fault};
+use crate::format::Num;
+use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;

@@ -39,6 +39,7 @@ use crate::output::trajectory::Trajectory;
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
+use crate::scene_view::SceneView;
 
 /// At rest: the final speed is below this fraction of the speed at first contact.
 pub const REST_SPEED_FRACTION: f64 = 0.01;
@@ -252,7 +253,7 @@ impl Output for Impact {
         section
     }
 
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+    fn check_scene(&self, scene: &SceneView) -> Result<(), String> {
         if !scene.body(&self.body)?.tracked {
             return Err(format!(
                 "body \"{}\" must be tracked (tracked: true) so that its trajectory is recorded",
@@ -314,7 +315,7 @@ fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
             format!(
                 "body \"{}\" felt no contact force before the run ended at t = {} s",
                 watch.body,
-                super::Seconds(now)
+                crate::format::Seconds(now)
             )
         })?;
         let mass = mass.ok_or_else(|| format!("no body \"{}\"", watch.body))?;
@@ -327,7 +328,7 @@ fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
         .ok_or_else(|| {
             format!(
                 "fewer than two trajectory rows after first contact at t = {} s",
-                super::Seconds(contact.time)
+                crate::format::Seconds(contact.time)
             )
         })
     };

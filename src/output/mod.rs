@@ -32,6 +32,12 @@ use crate::error::Fault;
 use crate::plugin::Install;
 use crate::registry::DynItem;
 use crate::resources::Clock;
+use crate::scene_view::SceneView;
+
+/// Their home is below the outputs (`format`, `resources`); named here too, as they were
+/// before, for code written against these paths.
+pub use crate::format::{Num, Seconds};
+pub use crate::resources::Interval;
 
 /// The directory a run writes into, if it writes files at all (tests run without one).
 #[derive(Resource, Clone, Debug, Default)]
@@ -46,7 +52,7 @@ pub trait Output: DynItem {
     }
     /// What must hold between the output and the rest of the scene; `check` reports a
     /// failure at the output's line. By default, that the bodies it names exist.
-    fn check_scene(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+    fn check_scene(&self, scene: &SceneView) -> Result<(), String> {
         self.bodies()
             .into_iter()
             .try_for_each(|b| scene.body(b).map(|_| ()))
@@ -73,33 +79,7 @@ pub trait Output: DynItem {
     }
 }
 
-crate::item_kind!(Output, "output");
-
-/// A fixed output interval in simulated time: due at t = 0, then every `every` seconds, and
-/// at the last step.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct Interval {
-    pub every: f64,
-    next: f64,
-}
-
-impl Interval {
-    pub fn new(every: f64) -> Self {
-        Interval { every, next: 0.0 }
-    }
-
-    /// Whether an output is due now (and, if so, moves on to the next time).
-    pub fn due(&mut self, clock: &Clock) -> bool {
-        let eps = 1e-9 * self.every;
-        if !(clock.observing || clock.last_step || clock.time >= self.next - eps) {
-            return false;
-        }
-        while self.next <= clock.time + eps {
-            self.next += self.every;
-        }
-        true
-    }
-}
+item_kind!(Output, "output");
 
 /// Listed output times: each is written at the first step at or past it.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -244,37 +224,6 @@ impl OutputFaults {
     }
 }
 
-/// A number as the CSV files write it: the shortest text that reads back to the same `f64`,
-/// in plain decimals from 1e-4 up to 1e16 (`0.455`, `-3.55`, `0`) and in exponent form
-/// beyond (`-3.42e-17`), as Python's `repr` does. Before, every number had an exponent
-/// (`4.55e-1`, `0e0`), which is exact but hard to read in a spreadsheet.
-#[derive(Clone, Copy, Debug)]
-pub struct Num(pub f64);
-
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || (1e-4..1e16).contains(&a) || !a.is_finite() {
-            write!(f, "{}", self.0)
-        } else {
-            write!(f, "{:e}", self.0)
-        }
-    }
-}
-
-/// A simulated time as messages print it: nine significant digits, then the shortest text
-/// (`0.3` for a clock that summed its steps to 0.30000000000000004, `0.0123456789`): a
-/// message names a moment, which nine digits place to well under a step.
-#[derive(Clone, Copy, Debug)]
-pub struct Seconds(pub f64);
-
-impl std::fmt::Display for Seconds {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let rounded: f64 = format!("{:.8e}", self.0).parse().unwrap_or(self.0);
-        write!(f, "{}", Num(rounded))
-    }
-}
-
 /// A time-series table as CSV: a `t` column, then one column per label; a NaN value is
 /// left empty.
 pub fn series_csv(labels: &[String], times: &[f64], rows: &[Vec<f64>]) -> String {
@@ -318,44 +267,4 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         f.sync_all()?;
     }
     std::fs::rename(&tmp, path)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{Num, Seconds};
-
-    #[test]
-    fn message_times_have_nine_significant_digits() {
-        assert_eq!(Seconds(0.1 + 0.2).to_string(), "0.3");
-        assert_eq!(Seconds(0.012345678901234567).to_string(), "0.0123456789");
-        assert_eq!(Seconds(0.0).to_string(), "0");
-        assert_eq!(Seconds(20.0).to_string(), "20");
-    }
-
-    #[test]
-    fn csv_numbers_are_plain_where_readable_and_read_back_exactly() {
-        let cases = [
-            (0.0, "0"),
-            (0.455, "0.455"),
-            (-3.55, "-3.55"),
-            (4.550000000000001e-1, "0.4550000000000001"),
-            (1e-4, "0.0001"),
-            (9.9e-5, "9.9e-5"),
-            (-3.42184996939323e-17, "-3.42184996939323e-17"),
-            (1e16, "1e16"),
-            (123456.0, "123456"),
-        ];
-        for (v, text) in cases {
-            assert_eq!(Num(v).to_string(), text);
-        }
-        // Every float reads back bit for bit, across the whole range.
-        let mut x = 1.234_567_890_123_456_7e-300_f64;
-        while x < 1e300 {
-            for v in [x, -x, x * (1.0 + f64::EPSILON)] {
-                let back: f64 = Num(v).to_string().parse().unwrap();
-                assert_eq!(back.to_bits(), v.to_bits(), "{v:e}");
-            }
-            x *= 3.7;
-        }
-    }
 }

@@ -18,11 +18,12 @@ use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::summary::Section;
 use crate::output::{
-    Interval, Output, OutputFaults, RunDir, check_every, due_points, series_csv, write_or_fault,
+    Output, OutputFaults, RunDir, check_every, due_points, series_csv, write_or_fault,
 };
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
+use crate::resources::Interval;
 use crate::step::StepSet;
 
 #[derive(Clone, Debug, serde::Deserialize)]

@@ -11,9 +11,10 @@ use std::fmt::Write as _;
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
-use super::{Num, Output, OutputFaults, RunDir, Timing, write_or_fault};
+use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::carry::{Carried, carried, restored};
+use crate::format::Num;
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;

@@ -81,7 +81,10 @@ impl Trajectory {
 }
 
 fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
-    let text: Vec<String> = row.iter().map(|&v| super::Num(v).to_string()).collect();
+    let text: Vec<String> = row
+        .iter()
+        .map(|&v| crate::format::Num(v).to_string())
+        .collect();
     writeln!(w, "{}", text.join(","))
 }
 

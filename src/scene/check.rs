@@ -315,6 +315,7 @@ impl Scene {
         }
         self.check_bodies(text, origin)?;
         let mut listed = HashSet::new();
+        let view = self.view();
         for output in &self.outputs {
             let name = output.name();
             if !listed.insert(name) {
@@ -329,11 +330,11 @@ impl Scene {
                     ),
                 ));
             }
-            output.check_scene(self).or_else(|e| item_err(name, e))?;
+            output.check_scene(&view).or_else(|e| item_err(name, e))?;
         }
         for condition in &self.conditions {
             condition
-                .check_scene(self)
+                .check_scene(&view)
                 .or_else(|e| item_err(condition.name(), e))?;
         }
         if let Some(cfl) = self.fixed_step_cfl()

@@ -20,8 +20,6 @@ use serde::Deserialize;
 use crate::condition::Condition;
 use crate::contact::{Contact, NoSlip};
 use crate::error::SceneError;
-use crate::geometry::Shape;
-use crate::material::MaterialSpec;
 use crate::obstacle::ObstacleSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
@@ -29,7 +27,8 @@ use crate::shape_functions::{CpdiFixed, ShapeFunctions};
 use crate::step::spacing::Spacing;
 use crate::velocity::{AffineFlip, Transfer};
 
-pub use crate::resources::{Segment, Side, TimeStep, Wall, Walls};
+pub use crate::resources::{Dilatation, Segment, Side, StressUpdate, TimeStep, Wall, Walls};
+pub use crate::scene_view::{BodySpec, InitialStress, SceneView};
 
 /// A whole scene file.
 #[derive(Clone, Debug, Deserialize)]
@@ -120,29 +119,6 @@ fn default_flip() -> f64 {
     1.0
 }
 
-/// The update-stress-last variant (docs/numerics.md).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum StressUpdate {
-    /// `L` from the updated grid velocity `(mv)/m` (the paper's choice). With `Linear`
-    /// integration, nodes of tiny mass make it unstable (docs/numerics.md).
-    #[default]
-    Usl,
-    /// Modified USL: `L` from the updated point velocities mapped back to the grid, which
-    /// stays bounded at nodes of tiny mass; costs one more scatter and gather per step.
-    Musl,
-}
-
-/// How the volumetric part of the velocity gradient is taken (docs/numerics.md).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum Dilatation {
-    /// Each point's own `tr L` (the paper's formulation).
-    PerPoint,
-    /// The volume-weighted mean `tr L` of the points in the point's cell; removes the
-    /// checkerboard pressure mode of several points per cell.
-    #[default]
-    CellAveraged,
-}
-
 /// The rectangular domain and its grid of square cells.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -182,48 +158,6 @@ pub struct Limits {
     pub max_kinetic_energy: Option<f64>,
 }
 
-/// One body.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BodySpec {
-    pub name: String,
-    pub shape: Named<dyn Shape>,
-    pub material: Named<dyn MaterialSpec>,
-    /// Material points per cell along each direction (2 gives the paper's 2x2 at quadrant
-    /// centres); default 2.
-    #[serde(default = "default_ppc")]
-    pub points_per_cell: usize,
-    /// Initial velocity (m/s); default zero.
-    #[serde(default)]
-    pub velocity: DVec2,
-    /// Initial stress; default `None`.
-    #[serde(default)]
-    pub initial_stress: InitialStress,
-    /// With `Lithostatic`: `T_xx = T_zz = k T_yy` with this `k` instead of the material's
-    /// own ratio (1 for the granular materials, `nu / (1 - nu)` for `LinearElastic`). A
-    /// free-standing column is in equilibrium with `k = 0`.
-    #[serde(default)]
-    pub lateral_stress_ratio: Option<f64>,
-    /// Whether the body's centre of mass goes into `trajectory.csv`; default false.
-    #[serde(default)]
-    pub tracked: bool,
-}
-
-fn default_ppc() -> usize {
-    2
-}
-
-/// How a body's stress starts.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum InitialStress {
-    /// Stress free.
-    #[default]
-    None,
-    /// In equilibrium under gravity (which must point along -y): `T_yy = -rho g (H - y)` below
-    /// the body's top surface `H` at each x, lateral components from the material's ratio.
-    Lithostatic,
-}
-
 /// The RON dialect of regolith's files: optional values are written bare
 /// (`critical_density: 1011.2`, `jobs: 2`), not `Some(..)`.
 pub fn ron_options() -> ron::Options {
@@ -247,20 +181,14 @@ fn scene_names(message: &str) -> String {
 }
 
 impl Scene {
-    /// The body called `name`, or a message naming the scene's bodies: what an item that
-    /// names a body (an output, a condition) checks in its `check_scene`.
+    /// The body called `name`, or a message naming the scene's bodies.
     pub fn body(&self, name: &str) -> Result<&BodySpec, String> {
-        self.bodies.iter().find(|b| b.name == name).ok_or_else(|| {
-            let names: Vec<String> = self
-                .bodies
-                .iter()
-                .map(|b| format!("\"{}\"", b.name))
-                .collect();
-            format!(
-                "body \"{name}\" is not in the scene (its bodies: {})",
-                names.join(", ")
-            )
-        })
+        self.view().body(name)
+    }
+
+    /// What an item (an output, a condition) is checked against: the bodies and the grid.
+    pub fn view(&self) -> SceneView<'_> {
+        SceneView::new(&self.bodies, self.grid())
     }
 
     /// Parses RON text; `origin` names the file in messages.

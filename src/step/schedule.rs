@@ -18,7 +18,7 @@
 //! ```
 //!
 //! The core systems of each set sit in its [`Core`] subset; a plugin's systems
-//! ([`crate::Regolith::add_systems`]) run in the set after its core, so a plugin that moves
+//! (`Regolith::add_systems`, module `plugin`) run in the set after its core, so a plugin that moves
 //! points in `Prepare` sees this step's time step and cleared grids. Each set is followed by
 //! a timing lap ([`Timings`]). The executor is single-threaded with ambiguity detection set
 //! to error: two systems that touch the same data in no defined order stop the build, named.
@@ -35,7 +35,7 @@ use super::{cell_average, grid_update, locate, prepare, transfer};
 use crate::diagnostics;
 use crate::output::trajectory;
 use crate::resources::{Clock, OutputClock};
-use crate::scene::{Dilatation, StressUpdate};
+use crate::resources::{Dilatation, StressUpdate};
 use crate::shape_functions::{Scheme, ShapeFunctions};
 
 /// The stages of a step, run in this order.

@@ -17,7 +17,7 @@ mod read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::plan::BatchFile;
+use crate::batch::BatchFile;
 use crate::poncelet::{DEFAULT_CELLS, Derivatives, fit, load_run};
 use crate::sweep::Sweep;
 use crate::workers::run_local;

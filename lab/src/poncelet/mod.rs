@@ -10,8 +10,8 @@
 //! still goes down, where `z(t)` is one-to-one), and the spline's derivatives give `z'` and
 //! `z''` there.
 
+use regolith::format::Num;
 use regolith::linefit::line_fit;
-use regolith::output::Num;
 
 mod runs;
 mod spline;

@@ -24,7 +24,7 @@ use regolith::output::summary::Section;
 use regolith::output::{OutputFaults, RunDir, write_atomic};
 use regolith::plugin::{Install, Plugin, Regolith};
 use regolith::registry::Item;
-use regolith::scene::Scene;
+use regolith::scene::SceneView;
 use regolith::sim::Clock;
 use regolith::step::{StepSet, output_due};
 use serde::{Deserialize, Serialize};
@@ -51,7 +51,7 @@ impl Item for Driven {
 }
 
 impl Condition for Driven {
-    fn check_scene(&self, scene: &Scene) -> Result<(), String> {
+    fn check_scene(&self, scene: &SceneView) -> Result<(), String> {
         let body = scene.body(&self.body)?;
         if body.velocity != self.velocity {
             return Err(format!(
