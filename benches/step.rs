@@ -8,7 +8,7 @@ use regolith::material::granular::MuI;
 use regolith::material::update_stress;
 use regolith::shape_functions::{CpdiFixed, Footprint, Scheme};
 use regolith::sim::on_worker;
-use regolith::step::transfer::{affine_to_particle, particle_to_grid};
+use regolith::step::scatter_gather::{affine_to_particle, particle_to_grid};
 use regolith::step::{locate_points, update_grid};
 use regolith::{Regolith, Scene, Simulation};
 

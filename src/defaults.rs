@@ -9,6 +9,7 @@ use crate::error::SceneError;
 use crate::geometry::Shape;
 use crate::geometry::builtin::{Disc, Polygon, Rectangle};
 use crate::geometry::intruder::TippedIntruder;
+use crate::integration::ShapeFunctions;
 use crate::material::MaterialSpec;
 use crate::material::elastic::LinearElastic;
 use crate::material::granular::{DruckerPrager, MuI};
@@ -25,8 +26,8 @@ use crate::output::snapshots::Snapshots;
 use crate::output::vtk::Vtk;
 use crate::plugin::{Plugin, Regolith};
 use crate::scene::Scene;
-use crate::shape_functions::{CpdiFixed, Linear, QuadraticBspline, ShapeFunctions};
-use crate::velocity::{AffineFlip, Apic, Flip, Transfer};
+use crate::shape_functions::{CpdiFixed, Linear, QuadraticBspline};
+use crate::transfer::{AffineFlip, Apic, Flip, Transfer};
 
 /// The built-in materials, shapes, outputs, shape functions, contact laws and transfers.
 pub struct DefaultPlugins;

@@ -189,7 +189,7 @@ impl GridField {
     /// The nodes that may be non-empty or hold last step's values: those the last two
     /// scatters wrote. Every other node is empty, at rest and without force, and stays so
     /// only if nothing writes it: a plugin system that changes nodal values must keep to
-    /// nodes with mass, as the contact laws and `Driven` do (`tests/active_nodes.rs`).
+    /// nodes with mass, as the contact laws and `Driven` do (`tests/step/active_nodes.rs`).
     pub fn active(&self) -> Range<usize> {
         let (a, b) = (&self.written, &self.previously);
         match (a.is_empty(), b.is_empty()) {

@@ -20,16 +20,17 @@
 //!    column of the body's [`PointFields`], which the constitutive update hands to
 //!    `Material::update` (module `material`) as `PointStep::fields`.
 //!
-//! Where they run depends on what the field's law reads. A law of the point state at the
-//! start of the step runs in the `ParticleToGrid` set, after its core systems: the footprints
-//! and the bands of the lock-free scatter then describe the points where they stand. A law
-//! that reads this step's velocity gradient or density (the fluidity's, which needs the
-//! elastic trial stress) runs in `GridToParticle`, after its core systems: the footprints
-//! are still the start of the step's (the velocity gradient was gathered with them), but the
+//! Where they run depends on what the field's law reads (the step's table, `schedule.rs`). A
+//! law of the point state at the start of the step runs in the `ParticleToGrid` set, after
+//! the scatter (`FieldSystems::located`): the footprints and the bands of the lock-free
+//! scatter then describe the points where they stand. A law that reads this step's velocity
+//! gradient or density (the fluidity's, which needs the elastic trial stress) runs first in
+//! `ConstitutiveUpdate`, after the move (`FieldSystems::before_update`): the footprints are
+//! still the start of the step's (the velocity gradient was gathered with them), but the
 //! bands have been rebuilt for the moved points, so such a field scatters with the bands kept
-//! from the start of the step ([`StartBands`]). A material declares the
-//! columns it reads (`Material::point_fields`) and adds the systems that
-//! fill them (`Material::add_field_systems`).
+//! from the start of the step ([`StartBands`]). A material declares the columns it reads
+//! (`Material::point_fields`) and hands over the systems that fill them
+//! (`Material::field_systems`); the step's builder places them.
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;

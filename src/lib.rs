@@ -25,6 +25,7 @@ pub mod format;
 pub mod geometry;
 pub mod grid;
 pub mod grid_field;
+pub mod integration;
 pub mod linefit;
 pub mod material;
 pub mod obstacle;
@@ -34,11 +35,12 @@ pub mod resources;
 pub mod run;
 pub mod scene;
 mod scene_view;
+pub mod schedule;
 pub mod shape_functions;
 pub mod sim;
 pub mod step;
 pub mod stress;
-pub mod velocity;
+pub mod transfer;
 
 /// Re-exported for plugin crates: the ECS and vector types of the public API.
 pub use bevy_ecs;
@@ -48,3 +50,7 @@ pub use defaults::DefaultPlugins;
 pub use plugin::{Plugin, Regolith};
 pub use scene::Scene;
 pub use sim::Simulation;
+
+/// The `transfer` item's old path, kept so that code written against it still builds.
+#[doc(hidden)]
+pub use transfer as velocity;

@@ -10,7 +10,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::velocity::Transfer;
+use crate::transfer::Transfer;
 
 /// Simulated time and the step count.
 #[derive(Resource, Clone, Debug, Serialize, Deserialize)]

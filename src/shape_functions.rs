@@ -1,6 +1,7 @@
 //! Shape-function schemes: how a material point's node weights and weight gradients are made.
 //!
-//! The schemes differ only here; the step is the same for all (docs/model.md §3). Every
+//! The schemes differ only here; the step is the same for all (docs/model.md §3). A scene
+//! picks one with its `integration` item (module `integration`). Every
 //! built-in scheme is a tensor product of a 1D rule; two are built on the bilinear hat
 //! `N(x) = max(0, 1 - |x|/h)`:
 //!
@@ -24,13 +25,11 @@
 //! A point that is itself outside the domain is a fault caught by the diagnostics; here its
 //! coordinate is clamped so that indexing never leaves the grid.
 
-use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 use serde::Deserialize;
 
 use crate::grid::GridGeometry;
-use crate::registry::{DynItem, Item};
-use crate::step::StepOptions;
+use crate::registry::Item;
 
 /// Weights of up to three consecutive nodes along one axis, starting at node `base`.
 /// `dw` is the derivative with respect to the coordinate in cell units.
@@ -51,22 +50,6 @@ pub trait Scheme: Item {
     /// 1D weights at coordinate `xi` (cell units from the origin) for a point of half-width
     /// `alpha` (cell units) on an axis of `cells` cells.
     fn axis(xi: f64, alpha: f64, cells: usize, periodic: bool) -> AxisWeights;
-}
-
-/// The shape functions a scene selects (`integration: CpdiFixed`): a kind of scene item,
-/// so a plugin may add a scheme. Every [`Scheme`] is one; it adds the scatter and gather
-/// systems compiled for its weights.
-pub trait ShapeFunctions: DynItem {
-    /// Adds the scatter and the gather built on these shape functions to the step.
-    fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions);
-}
-
-item_kind!(ShapeFunctions, "shape-function scheme");
-
-impl<S: Scheme> ShapeFunctions for S {
-    fn add_transfers(&self, schedule: &mut Schedule, options: &StepOptions) {
-        crate::step::add_transfers::<S>(schedule, options);
-    }
 }
 
 /// Standard MPM: point-evaluated bilinear weights.

@@ -1,7 +1,6 @@
 //! A simulation: the ECS world built from a scene, and the schedule that steps it.
 
 use crate::step::spacing::{Spacing, SpacingScratch};
-use std::collections::BTreeSet;
 
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
@@ -17,11 +16,14 @@ use crate::output::{OutputFaults, RunDir};
 use crate::plugin::Install;
 use crate::resources::{Dilatation, Interval};
 use crate::scene::{BodySpec, InitialStress, Scene};
-use crate::step::{self, Timings};
+use crate::schedule::{StepOptions, build_schedule};
+use crate::step::Timings;
 use crate::step::{Bands, CellDilatation, Location};
 use crate::stress::Stress;
 
-// The global state moved to `resources`; these names stay valid for plugins and tests.
+// The global state's old paths, kept so that code written against them still builds; the one
+// documented path is `resources`.
+#[doc(hidden)]
 pub use crate::resources::{Boundaries, Clock, Gravity, OutputClock, StepRule, VelocityRule};
 
 /// A ready-to-step simulation.
@@ -33,7 +35,7 @@ pub struct Simulation {
 /// Runs `f` on a thread of the current rayon pool. The step's parallel loops then push
 /// their jobs onto that worker's own deque, which keeps its capacity, and a step allocates
 /// nothing; launched from outside the pool every parallel loop goes through rayon's global
-/// injector, which allocates a block every 63 jobs (measured in tests/determinism.rs).
+/// injector, which allocates a block every 63 jobs (measured in tests/invariants/determinism.rs).
 pub fn on_worker<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     if rayon::current_thread_index().is_some() {
         f()
@@ -122,17 +124,10 @@ impl Simulation {
         let grid = scene.grid();
         let mut world = World::new();
         let multi_body = scene.bodies.len() > 1;
-        let mut schedule = step::build_schedule(&step::StepOptions {
-            integration: &*scene.integration,
-            update: scene.update,
-            dilatation: scene.dilatation,
-            affine: scene.transfer.affine(),
-            spacing: scene.spacing,
-        });
+        let mut schedule = build_schedule(&StepOptions::of(scene));
         if multi_body {
-            scene.contact.install(&mut world, &mut schedule);
+            scene.contact.insert_resources(&mut world);
         }
-        let mut materials = BTreeSet::new();
         let mut tracked = Vec::new();
         for (index, spec) in scene.bodies.iter().enumerate() {
             let lattice = fill(&*spec.shape, &grid, spec.points_per_cell);
@@ -197,9 +192,6 @@ impl Simulation {
             spec.material.attach(&mut entity, n);
             if scene.dilatation == Dilatation::CellAveraged {
                 entity.insert(CellDilatation::new(grid.cells[0] * grid.cells[1]));
-            }
-            if materials.insert(spec.material.name()) {
-                spec.material.add_systems(&mut schedule);
             }
         }
         for output in &scene.outputs {
@@ -377,7 +369,7 @@ impl Simulation {
     pub fn next_time_step(&mut self) -> (f64, f64) {
         let h = self.grid().cell_size;
         let mut q = self.world.query::<(&Body, &BodyState)>();
-        let signal = step::signal_speed(q.iter(&self.world));
+        let signal = crate::step::signal_speed(q.iter(&self.world));
         let rule = self.world.resource::<StepRule>().rule;
         let dt = rule.dt(h, signal, self.clock().end);
         (dt, dt * signal / h)

@@ -5,9 +5,10 @@ use std::sync::Arc;
 
 use regolith::error::{Error, SceneError};
 use regolith::registry::Registries;
+use regolith::resources::Clock;
 use regolith::run::{CheckpointEvery, Provenance, memory_estimate, resume_run, run_scene};
 use regolith::scene::{InitialStress, Scene, TimeStep};
-use regolith::sim::{Clock, Simulation};
+use regolith::sim::Simulation;
 use regolith_lab::batch::BatchFile;
 use regolith_lab::plan::{Layout, SlurmOptions, write_plan};
 use regolith_lab::workers::run_local;

@@ -6,7 +6,7 @@ use std::time::Duration;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use regolith::output::summary::Summary;
-use regolith::sim::Clock;
+use regolith::resources::Clock;
 
 /// A progress bar on stderr (hidden with `--quiet`), redrawn every 50 steps.
 pub(crate) fn progress_bar(quiet: bool) -> ProgressBar {

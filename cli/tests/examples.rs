@@ -1,5 +1,5 @@
-//! The command examples users paste (issue 38): the README's command lines and its `--set`
-//! examples, the commands and `--set` examples in the shipped scenes' comments, and the
+//! The command examples users paste (issue 38): the command lines and `--set` examples of
+//! the README and the guides in docs/ (and the README's commands run as written), the commands and `--set` examples in the shipped scenes' comments, and the
 //! `--set` example of `regolith run --help`. Each must be valid shell as written (an
 //! unquoted `(0,-1)` is a bash syntax error), and each that runs a shipped scene must load
 //! it with its overrides: bash splits the line as a user's shell would, and the words go to
@@ -88,8 +88,19 @@ fn check_example(example: &str, failures: &mut Vec<String>) {
 fn every_example_pastes_into_bash_and_loads_its_scene() {
     // Each a whole command line: a bare `--set` example is put after the scene it is for.
     let mut examples: Vec<String> = Vec::new();
-    // The README: command lines in code blocks, `--set` examples in its text.
-    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    // The README and the guides: command lines in code blocks, `--set` examples in text.
+    let readme: String = [
+        "README.md",
+        "docs/cli.md",
+        "docs/scenes.md",
+        "docs/sweeps.md",
+        "docs/viewers.md",
+        "docs/extending.md",
+    ]
+    .iter()
+    .map(|f| std::fs::read_to_string(root().join(f)).unwrap())
+    .collect::<Vec<_>>()
+    .join("\n");
     // Inside a fence: `Some(true)` for a plain one (shell), `Some(false)` for another language.
     let mut fence: Option<bool> = None;
     for line in readme.lines() {
@@ -175,4 +186,75 @@ fn every_example_pastes_into_bash_and_loads_its_scene() {
     );
     // What this reads today (2026-12-06: 21), so that a change of format is noticed.
     assert!(examples.len() >= 20, "{examples:#?}");
+}
+
+/// The README's shell commands that a test cannot run, and why: building and testing are
+/// what runs this test, and the viewers are programs with windows. A viewer's command is
+/// checked instead for the file it opens, which the command before it must have written.
+const NOT_RUN: [(&str, &str); 3] = [
+    ("cargo build --release", "the build this test runs in"),
+    ("bash .ci/run", "the tests this test is one of"),
+    (
+        "cargo test --release --workspace",
+        "the tests this test is one of",
+    ),
+];
+
+/// Every command of the README's shell blocks, run as written in a scratch directory that
+/// holds the repository's scenes: a newcomer's first commands must work, and the files a
+/// viewer is then told to open must exist.
+#[test]
+fn the_readme_commands_run_as_written() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let mut commands = Vec::new();
+    let mut fence: Option<bool> = None;
+    for line in readme.lines() {
+        let trimmed = line.trim();
+        if trimmed.starts_with("```") {
+            fence = match fence {
+                Some(_) => None,
+                None => Some(trimmed == "```"),
+            };
+            continue;
+        }
+        if fence == Some(true) && !trimmed.is_empty() {
+            commands.push(trimmed.to_string());
+        }
+    }
+    assert!(commands.len() >= 5, "commands found: {commands:?}");
+    let scratch = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink(root().join("scenes"), scratch.path().join("scenes")).unwrap();
+    let mut ran = 0;
+    for command in &commands {
+        if NOT_RUN.iter().any(|(c, _)| c == command) {
+            continue;
+        }
+        let words = words(command).unwrap_or_else(|e| panic!("{command}: {e}"));
+        let args: Vec<&str> = words.iter().map(String::as_str).collect();
+        let args = match args.as_slice() {
+            ["regolith", rest @ ..] | ["cargo", "run", "--release", "--", rest @ ..] => rest,
+            ["rerun" | "paraview", file] => {
+                assert!(
+                    scratch.path().join(file).is_file(),
+                    "{command}: the command before it wrote no {file}"
+                );
+                continue;
+            }
+            _ => panic!("{command}: a README command this test neither runs nor lists in NOT_RUN"),
+        };
+        let quiet = (args.first() == Some(&"run")).then_some("--quiet");
+        let out = Command::new(env!("CARGO_BIN_EXE_regolith"))
+            .args(args)
+            .args(quiet)
+            .current_dir(scratch.path())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{command}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        ran += 1;
+    }
+    assert!(ran >= 4, "{ran} commands run");
 }

@@ -10,7 +10,10 @@ use std::time::Instant;
 
 use regolith::material::elastic::p_wave_modulus;
 use regolith::{Regolith, Scene, Simulation};
-use regolith_lab::verify::{bar_mode_period, front_speed, largest_stress};
+#[path = "../../tests/common/measure.rs"]
+mod measure;
+
+use measure::{bar_mode_period, front_speed, largest_stress};
 
 /// The variants compared: (integration, update).
 const VARIANTS: [(&str, &str); 4] = [

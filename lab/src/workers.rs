@@ -141,7 +141,7 @@ fn run_one(
             &from,
             &out,
             CheckpointEvery(None),
-            &mut |_: &regolith::sim::Clock| claim.heartbeat(),
+            &mut |_: &regolith::resources::Clock| claim.heartbeat(),
         )
     })?;
     Ok(Claimed::Mine(claim))

@@ -118,7 +118,7 @@ fn run_to_dir(scene: &Scene, out: PathBuf, checkpoint_every: Option<u64>) -> PyR
         &scene.provenance(),
         &out,
         CheckpointEvery(checkpoint_every),
-        &mut |_: &regolith::sim::Clock| {},
+        &mut |_: &regolith::resources::Clock| {},
     )
     .map_err(|e| match e {
         Error::Scene(e) => scene_error(e),

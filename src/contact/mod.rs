@@ -24,6 +24,8 @@
 //! before their points touch.
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleConfigs;
+use bevy_ecs::system::ScheduleSystem;
 use glam::DVec2;
 use serde::Deserialize;
 
@@ -32,7 +34,7 @@ use crate::grid::{GridField, GridGeometry};
 use crate::obstacle::Obstacles;
 use crate::registry::{DynItem, Item};
 use crate::resources::{Boundaries, Clock};
-use crate::step::{Core, StepSet, apply_walls};
+use crate::step::apply_walls;
 
 /// A contact law between bodies: a kind of scene item (`contact: Frictional(friction: 0.1)`),
 /// so a plugin may add one. Its system sits in the core of the Contact set, which only
@@ -46,8 +48,11 @@ pub trait Contact: DynItem {
     fn normal_body(&self) -> Option<&str> {
         None
     }
-    /// Adds the law's resources and its system, in `Core(StepSet::Contact)`.
-    fn install(&self, world: &mut World, schedule: &mut Schedule);
+    /// The law's system, which the step runs in the core of its Contact set.
+    fn system(&self) -> ScheduleConfigs<ScheduleSystem>;
+    /// Inserts what the law's system reads (its parameters) into a new simulation's world;
+    /// nothing by default.
+    fn insert_resources(&self, _world: &mut World) {}
 }
 
 item_kind!(Contact, "contact law");
@@ -65,8 +70,8 @@ impl Contact for NoSlip {
     fn needs_normal_of(&self, _body: &str, _bodies: usize) -> bool {
         false
     }
-    fn install(&self, _world: &mut World, schedule: &mut Schedule) {
-        schedule.add_systems(no_slip.in_set(Core(StepSet::Contact)));
+    fn system(&self) -> ScheduleConfigs<ScheduleSystem> {
+        no_slip.into_configs()
     }
 }
 
@@ -128,9 +133,11 @@ impl Contact for Frictional {
             NormalRule::Body(name) => Some(name),
         }
     }
-    fn install(&self, world: &mut World, schedule: &mut Schedule) {
+    fn system(&self) -> ScheduleConfigs<ScheduleSystem> {
+        frictional.into_configs()
+    }
+    fn insert_resources(&self, world: &mut World) {
         world.insert_resource(self.clone());
-        schedule.add_systems(frictional.in_set(Core(StepSet::Contact)));
     }
 }
 

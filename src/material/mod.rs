@@ -12,6 +12,8 @@ pub mod nonlocal;
 use std::fmt::Debug;
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleConfigs;
+use bevy_ecs::system::ScheduleSystem;
 use bevy_ecs::world::EntityWorldMut;
 use glam::DMat2;
 use rayon::prelude::*;
@@ -22,7 +24,6 @@ use crate::body::{Phase, PointStates, Points, inertial_number};
 use crate::grid_field::{GridFields, PointFields, StartBands};
 use crate::registry::{DynItem, Item};
 use crate::resources::Clock;
-use crate::step::{Core, MaterialUpdates, StepSet};
 use crate::stress::Stress;
 
 /// What the constitutive update of one point sees.
@@ -73,14 +74,16 @@ pub trait Material: Item {
         Ok(())
     }
     /// The per-point values of grid fields this material reads in [`Material::update`]
-    /// (`PointStep::fields`), which the systems of [`Material::add_field_systems`] fill;
+    /// (`PointStep::fields`), which the systems of [`Material::field_systems`] fill;
     /// none by default.
     fn point_fields() -> &'static [&'static str] {
         &[]
     }
-    /// Adds the systems that fill [`Material::point_fields`] each step (`crate::grid_field`
-    /// says where they go); none by default.
-    fn add_field_systems(_schedule: &mut Schedule) {}
+    /// The systems that fill [`Material::point_fields`] each step, each for its place
+    /// ([`FieldSystems`]; `crate::grid_field` says what they do); none by default.
+    fn field_systems() -> FieldSystems {
+        FieldSystems::default()
+    }
     /// Advances one point's stress and history over one step; returns the point's plastic
     /// shear strain rate and phase.
     fn update(
@@ -89,6 +92,18 @@ pub trait Material: Item {
         history: &mut Self::History,
         step: &PointStep,
     ) -> PointOutcome;
+}
+
+/// The systems that fill a material's grid fields, each for its place in the step (the
+/// table of `schedule.rs`). Like the update, each must touch only bodies of its own
+/// material, so that materials' systems need no order among themselves.
+#[derive(Default)]
+pub struct FieldSystems {
+    /// At the start of the step, once the points are located and scattered
+    /// (ParticleToGrid).
+    pub located: Option<ScheduleConfigs<ScheduleSystem>>,
+    /// After the move, before the material updates (ConstitutiveUpdate).
+    pub before_update: Option<ScheduleConfigs<ScheduleSystem>>,
 }
 
 /// What one constitutive update reports about its point.
@@ -111,8 +126,10 @@ pub trait MaterialSpec: DynItem {
     fn check_step(&self, cell_size: f64, max_dt: f64) -> Result<(), String>;
     /// Inserts the body's [`MaterialState`] for `points` points.
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
-    /// Adds this material's update system (called once per material type in a scene).
-    fn add_systems(&self, schedule: &mut Schedule);
+    /// This material's update system (the step runs one per material type of a scene).
+    fn update_system(&self) -> ScheduleConfigs<ScheduleSystem>;
+    /// The systems that fill the material's grid fields ([`Material::field_systems`]).
+    fn field_systems(&self) -> FieldSystems;
     /// Bytes of history per point (for memory estimates).
     fn history_bytes(&self) -> usize;
     /// The body's per-point history, encoded for a checkpoint.
@@ -158,15 +175,13 @@ impl<M: Material> MaterialSpec for M {
             ));
         }
     }
-    fn add_systems(&self, schedule: &mut Schedule) {
-        M::add_field_systems(schedule);
-        schedule.add_systems(
-            update_stress::<M>
-                .in_set(Core(StepSet::ConstitutiveUpdate))
-                .in_set(MaterialUpdates)
-                // Each material's system only touches bodies carrying its own state.
-                .ambiguous_with(MaterialUpdates),
-        );
+    fn update_system(&self) -> ScheduleConfigs<ScheduleSystem> {
+        // It only touches bodies carrying this material's state, so the step may run it in
+        // any order with other materials' updates.
+        update_stress::<M>.into_configs()
+    }
+    fn field_systems(&self) -> FieldSystems {
+        M::field_systems()
     }
     fn history_bytes(&self) -> usize {
         std::mem::size_of::<M::History>()

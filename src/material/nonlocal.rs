@@ -12,8 +12,8 @@
 //! How a step advances it, per body of this material (docs/model.md §4.2). The fluidity's
 //! equation is solved on the grid's nodes, and each point carries the nodal increments, the
 //! usual treatment of a diffused field in MPM (as thermal and damage fields are):
-//! 1. `advance_fluidity` (a grid field, `crate::grid_field`, in `GridToParticle` after the
-//!    velocity gradient and the density are known): each point's elastic trial stress; the
+//! 1. `advance_fluidity` (a grid field, `crate::grid_field`, first in `ConstitutiveUpdate`,
+//!    once the velocity gradient and the density are known): each point's elastic trial stress; the
 //!    seeding rule (below) on its `g`; the dense points' `g` and trial pressure `p` scattered
 //!    to the nodes with their volumes as weights; the nodal Laplacian of `g` with the walls'
 //!    conditions (`g = 0` on no-slip walls, zero flux elsewhere, settable per wall); each
@@ -73,13 +73,13 @@ use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
 use super::granular::{TransPhase, check_positive, trans_phase_params};
-use super::{Material, MaterialState, PointOutcome, PointStep};
+use super::{FieldSystems, Material, MaterialState, PointOutcome, PointStep};
 use crate::body::{Phase, PointStates, Points};
 use crate::grid::GridGeometry;
 use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields, StartBands};
 use crate::registry::Item;
 use crate::resources::{Boundaries, Clock, Wall, Walls};
-use crate::step::{Bands, Core, Location, StepSet};
+use crate::step::{Bands, Location};
 use crate::stress::Stress;
 
 /// The nonlocal amplitude `A` unless the scene gives one: Henann & Kamrin's (2013) calibration
@@ -444,15 +444,11 @@ impl Material for Nonlocal {
     fn point_fields() -> &'static [&'static str] {
         INTERPOLATED
     }
-    fn add_field_systems(schedule: &mut Schedule) {
-        schedule.add_systems((
-            keep_start_bands
-                .in_set(StepSet::ParticleToGrid)
-                .after(Core(StepSet::ParticleToGrid)),
-            advance_fluidity
-                .in_set(StepSet::GridToParticle)
-                .after(Core(StepSet::GridToParticle)),
-        ));
+    fn field_systems() -> FieldSystems {
+        FieldSystems {
+            located: Some(keep_start_bands.into_configs()),
+            before_update: Some(advance_fluidity.into_configs()),
+        }
     }
     fn update(
         &self,

@@ -34,9 +34,11 @@ use crate::registry::DynItem;
 use crate::resources::Clock;
 use crate::scene_view::SceneView;
 
-/// Their home is below the outputs (`format`, `resources`); named here too, as they were
-/// before, for code written against these paths.
+// Old paths, kept so that code written against them still builds; the one documented path
+// is `format` and `resources`, below the outputs.
+#[doc(hidden)]
 pub use crate::format::{Num, Seconds};
+#[doc(hidden)]
 pub use crate::resources::Interval;
 
 /// The directory a run writes into, if it writes files at all (tests run without one).

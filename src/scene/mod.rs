@@ -20,12 +20,13 @@ use serde::Deserialize;
 use crate::condition::Condition;
 use crate::contact::{Contact, NoSlip};
 use crate::error::SceneError;
+use crate::integration::ShapeFunctions;
 use crate::obstacle::ObstacleSpec;
 use crate::output::Output;
 use crate::registry::{Named, Registries, with_registries};
-use crate::shape_functions::{CpdiFixed, ShapeFunctions};
+use crate::shape_functions::CpdiFixed;
 use crate::step::spacing::Spacing;
-use crate::velocity::{AffineFlip, Transfer};
+use crate::transfer::{AffineFlip, Transfer};
 
 pub use crate::resources::{Dilatation, Segment, Side, StressUpdate, TimeStep, Wall, Walls};
 pub use crate::scene_view::{BodySpec, InitialStress, SceneView};

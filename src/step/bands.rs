@@ -6,7 +6,7 @@
 //! rows high: all even bands scatter in parallel, then all odd bands. No atomics, no locks;
 //! and because the band height does not depend on the thread count and each band visits its
 //! points in index order, every node receives its contributions in the same order whatever
-//! the number of threads (tests/determinism.rs hashes the state at 1 to 4 threads).
+//! the number of threads (tests/invariants/determinism.rs hashes the state at 1 to 4 threads).
 //!
 //! # Why no two bands of one phase can touch one node
 //! [`BandLayout`] cuts the rows and orders the phases; [`BandLayout::check`] proves the

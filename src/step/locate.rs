@@ -1,7 +1,7 @@
 //! Where each point sits on the grid this step, computed once and shared by the transfers.
 //!
 //! Points do not move between the scatter and the gather (they move last, in
-//! `transfer::advect_points`), so each point's footprint — its nine nodes, weights and
+//! `scatter_gather::advect_points`), so each point's footprint — its nine nodes, weights and
 //! gradients — is built once per step, in parallel, and read by the scatter, the gather and
 //! MUSL's remap. Building it in each transfer was a third of the step (docs/BENCHMARKS.md).
 //! Each point's cell (for the band bucketing of the lock-free scatter and for the cell

@@ -39,7 +39,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 use serde::Deserialize;
 
-use super::transfer::kept_box;
+use super::scatter_gather::kept_box;
 use crate::body::{Body, Points};
 use crate::grid::GridGeometry;
 use crate::obstacle::Obstacles;

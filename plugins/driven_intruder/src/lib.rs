@@ -24,8 +24,8 @@ use regolith::output::summary::Section;
 use regolith::output::{OutputFaults, RunDir, write_atomic};
 use regolith::plugin::{Install, Plugin, Regolith};
 use regolith::registry::Item;
+use regolith::resources::Clock;
 use regolith::scene::SceneView;
-use regolith::sim::Clock;
 use regolith::step::{StepSet, output_due};
 use serde::{Deserialize, Serialize};
 
