@@ -113,6 +113,17 @@ impl<'a> Install<'a> {
     pub fn world(&mut self) -> &mut World {
         self.world
     }
+
+    /// The entity of the body called `name`, found once here so that the item's systems
+    /// reach its components directly every step (`Query::get`) instead of comparing names;
+    /// `None` for a name no body has (the scene check refuses an item naming one).
+    pub fn body(&mut self, name: &str) -> Option<Entity> {
+        let mut bodies = self.world.query::<(Entity, &crate::body::Body)>();
+        bodies
+            .iter(self.world)
+            .find(|(_, b)| b.name == name)
+            .map(|(e, _)| e)
+    }
 }
 
 /// `systems` in step set `set`, after its core systems: where every system a plugin or a

@@ -18,7 +18,7 @@
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::{Carried, carried, restored};
 use crate::linefit::{line_fit, slope_error};
 use crate::output::summary::Section;
@@ -52,6 +52,8 @@ pub struct Discharge {
 #[derive(Resource, Clone, Debug)]
 pub struct DischargeRecord {
     spec: Discharge,
+    /// The body, found at install.
+    body: Option<Entity>,
     interval: Interval,
     /// The body's mass at the first record (kg/m).
     start_mass: Option<f64>,
@@ -160,8 +162,10 @@ impl Output for Discharge {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(DischargeRecord {
             spec: self.clone(),
+            body,
             interval: Interval::new(self.every),
             start_mass: None,
             times: Vec::new(),
@@ -241,13 +245,13 @@ fn record_discharge(
     dir: Res<RunDir>,
     mut record: ResMut<DischargeRecord>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
     let rec = &mut *record;
-    if let (Some(y), Some(points)) = (rec.spec.height, points_of(&bodies, &rec.spec.body)) {
+    if let (Some(y), Some(points)) = (rec.spec.height, points_of(&bodies, rec.body)) {
         rec.track(points, y);
     }
-    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, rec.body) else {
         return;
     };
     let mass: f64 = points.mass.iter().sum();

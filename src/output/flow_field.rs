@@ -15,7 +15,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::Deserialize;
 
-use crate::body::{Body, BodyState, Points};
+use crate::body::{BodyState, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::format::Num;
 use crate::output::{Instants, Output, OutputFaults, RunDir, check_instants, write_or_fault};
@@ -53,6 +53,8 @@ pub struct NormalisedField {
 #[derive(Resource, Clone, Debug)]
 pub struct FlowFields {
     spec: FlowField,
+    /// The bed and the intruder, found at install.
+    bodies: [Option<Entity>; 2],
     when: Instants,
     pub fields: Vec<NormalisedField>,
 }
@@ -80,8 +82,10 @@ impl Output for FlowField {
     }
 
     fn install(&self, sim: &mut Install) {
+        let bodies = [sim.body(&self.body), sim.body(&self.intruder)];
         sim.insert_resource(FlowFields {
             spec: self.clone(),
+            bodies,
             when: Instants::new(self.at.clone()),
             fields: Vec::new(),
         });
@@ -106,15 +110,15 @@ fn record_flow_field(
     dir: Res<RunDir>,
     mut fields: ResMut<FlowFields>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points, &BodyState)>,
+    bodies: Query<(&Points, &BodyState)>,
 ) {
     let index = fields.when.done();
     if !fields.when.due(&clock) {
         return;
     }
     let spec = &fields.spec;
-    let find = |name: &str| bodies.iter().find(|(b, _, _)| b.name == name);
-    let (Some((_, points, _)), Some((_, _, intruder))) = (find(&spec.body), find(&spec.intruder))
+    let find = |body: Option<Entity>| body.and_then(|e| bodies.get(e).ok());
+    let (Some((points, _)), Some((_, intruder))) = (find(fields.bodies[0]), find(fields.bodies[1]))
     else {
         return;
     };

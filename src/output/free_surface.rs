@@ -12,7 +12,7 @@
 use bevy_ecs::prelude::*;
 use serde::Deserialize;
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::{
@@ -36,7 +36,8 @@ pub struct FreeSurface {
 /// The surface profiles so far.
 #[derive(Resource, Clone, Debug)]
 pub struct SurfaceRecord {
-    spec: FreeSurface,
+    /// The body, found at install.
+    body: Option<Entity>,
     interval: Interval,
     /// Which cells the body fills (its points per cell at t = 0 carried over checkpoints).
     cells: DenseCells,
@@ -58,8 +59,9 @@ impl Output for FreeSurface {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(SurfaceRecord {
-            spec: self.clone(),
+            body,
             interval: Interval::new(self.every),
             cells: DenseCells::default(),
             times: Vec::new(),
@@ -87,10 +89,10 @@ fn record_surface(
     grid: Res<GridGeometry>,
     mut record: ResMut<SurfaceRecord>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
     let rec = &mut *record;
-    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, rec.body) else {
         return;
     };
     let [nx, ny] = grid.cells;

@@ -17,7 +17,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::{Carried, carried, restored};
 use crate::linefit::line_fit;
 use crate::output::summary::Section;
@@ -67,6 +67,8 @@ pub struct FrontMetrics {
 #[derive(Resource, Clone, Debug)]
 pub struct PressureRecord {
     pub spec: PressureFront,
+    /// The body, found at install.
+    body: Option<Entity>,
     interval: Interval,
     /// Each point's pressure at t = 0 (taken at the first record).
     initial: Vec<f64>,
@@ -170,8 +172,10 @@ impl Output for PressureFront {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(PressureRecord {
             spec: self.clone(),
+            body,
             interval: Interval::new(self.every),
             initial: Vec::new(),
             times: Vec::new(),
@@ -198,10 +202,10 @@ fn record_pressure(
     dir: Res<RunDir>,
     mut record: ResMut<PressureRecord>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
     let rec = &mut *record;
-    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, rec.body) else {
         return;
     };
     if record.initial.is_empty() {

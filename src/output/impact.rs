@@ -30,7 +30,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
-use crate::body::{Body, BodyState, Points};
+use crate::body::{BodyState, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridField;
 use crate::output::Output;
@@ -170,6 +170,8 @@ pub struct Impact {
 #[derive(Resource, Clone, Debug)]
 pub struct ImpactWatch {
     pub body: String,
+    /// The body's entity, found at install.
+    pub entity: Option<Entity>,
     pub surface: f64,
     pub contact: Option<ContactInstant>,
     /// Before contact, the body's state at the end of the last step (the start of the
@@ -197,12 +199,12 @@ impl ContactInstant {
 pub fn record_first_contact(
     clock: Res<Clock>,
     mut watch: ResMut<ImpactWatch>,
-    bodies: Query<(&Body, &BodyState, &Points, &GridField)>,
+    bodies: Query<(&BodyState, &Points, &GridField)>,
 ) {
     if watch.contact.is_some() {
         return;
     }
-    let Some((_, state, points, field)) = bodies.iter().find(|(b, ..)| b.name == watch.body) else {
+    let Some((state, points, field)) = watch.entity.and_then(|e| bodies.get(e).ok()) else {
         return;
     };
     if field.contact_force == DVec2::ZERO {
@@ -264,15 +266,15 @@ impl Output for Impact {
     }
 
     fn install(&self, sim: &mut Install) {
+        let entity = sim.body(&self.body);
         let world = sim.world();
         let time = world.get_resource::<Clock>().map_or(0.0, |c| c.time);
-        let mut q = world.query::<(&Body, &Points)>();
-        let start = q
-            .iter(world)
-            .find(|(b, _)| b.name == self.body)
-            .map(|(_, p)| ContactInstant::of(time, &BodyState::measure(p), p));
+        let start = entity
+            .and_then(|e| world.get::<Points>(e))
+            .map(|p| ContactInstant::of(time, &BodyState::measure(p), p));
         sim.insert_resource(ImpactWatch {
             body: self.body.clone(),
+            entity,
             surface: self.surface,
             contact: None,
             before: start,
@@ -298,11 +300,10 @@ fn measure(world: &World) -> Option<Result<ImpactMetrics, String>> {
     let watch = world.get_resource::<ImpactWatch>()?;
     let table = world.get_resource::<Trajectory>()?;
     let now = world.get_resource::<Clock>().map_or(0.0, |c| c.time);
-    let mass = world.try_query::<(&Body, &BodyState)>().and_then(|mut q| {
-        q.iter(world)
-            .find(|(b, _)| b.name == watch.body)
-            .map(|(_, s)| s.mass)
-    });
+    let mass = watch
+        .entity
+        .and_then(|e| world.get::<BodyState>(e))
+        .map(|s| s.mass);
     let series = |q: &str| {
         table
             .column(&watch.body, q)

@@ -26,7 +26,7 @@ use std::sync::Mutex;
 
 use bevy_ecs::prelude::*;
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::Carried;
 use crate::error::Fault;
 use crate::plugin::Install;
@@ -167,18 +167,18 @@ pub fn check_every(every: f64) -> Result<(), String> {
     }
 }
 
-/// The points of the body called `name`, among a query's bodies.
-pub fn points_of<'a>(bodies: &'a Query<(&Body, &Points)>, name: &str) -> Option<&'a Points> {
-    bodies.iter().find(|(b, _)| b.name == name).map(|(_, p)| p)
+/// The points of `body`, the entity an item found at install (`Install::body`).
+pub fn points_of<'a>(bodies: &'a Query<&Points>, body: Option<Entity>) -> Option<&'a Points> {
+    body.and_then(|e| bodies.get(e).ok())
 }
 
-/// The points of the body called `body` when `interval` is due at `clock` (the start of
+/// The points of `body` (as [`points_of`]) when `interval` is due at `clock` (the start of
 /// every periodic output's record); `None` when not due or when the body has no points.
 pub fn due_points<'a>(
     interval: &mut Interval,
     clock: &Clock,
-    bodies: &'a Query<(&Body, &Points)>,
-    body: &str,
+    bodies: &'a Query<&Points>,
+    body: Option<Entity>,
 ) -> Option<&'a Points> {
     if !interval.due(clock) {
         return None;

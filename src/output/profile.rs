@@ -13,7 +13,7 @@
 use bevy_ecs::prelude::*;
 use serde::Serialize;
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::summary::Section;
@@ -89,7 +89,8 @@ impl Profile {
 /// The records so far.
 #[derive(Resource, Clone, Debug)]
 pub struct ProfileRecord {
-    spec: VelocityProfile,
+    /// The body, found at install.
+    body: Option<Entity>,
     interval: Interval,
     pub times: Vec<f64>,
     pub profiles: Vec<Profile>,
@@ -133,8 +134,9 @@ impl Output for VelocityProfile {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(ProfileRecord {
-            spec: self.clone(),
+            body,
             interval: Interval::new(self.every),
             times: Vec::new(),
             profiles: Vec::new(),
@@ -191,10 +193,10 @@ fn record_profile(
     grid: Res<GridGeometry>,
     mut record: ResMut<ProfileRecord>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
     let rec = &mut *record;
-    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, rec.body) else {
         return;
     };
     record.times.push(clock.time);

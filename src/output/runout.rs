@@ -16,7 +16,7 @@
 use bevy_ecs::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::body::{Body, Points};
+use crate::body::Points;
 use crate::carry::{Carried, carried, restored};
 use crate::grid::GridGeometry;
 use crate::output::free_surface::DenseCells;
@@ -89,7 +89,8 @@ impl Extent {
 /// The records so far.
 #[derive(Resource, Clone, Debug)]
 pub struct RunoutRecord {
-    spec: Runout,
+    /// The body, found at install.
+    body: Option<Entity>,
     interval: Interval,
     /// Which cells the body fills (its points per cell at the first record carried over).
     cells: DenseCells,
@@ -144,8 +145,9 @@ impl Output for Runout {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(RunoutRecord {
-            spec: self.clone(),
+            body,
             interval: Interval::new(self.every),
             cells: DenseCells::default(),
             times: Vec::new(),
@@ -210,10 +212,10 @@ fn record_runout(
     grid: Res<GridGeometry>,
     mut record: ResMut<RunoutRecord>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
     let rec = &mut *record;
-    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, &rec.spec.body) else {
+    let Some(points) = due_points(&mut rec.interval, &clock, &bodies, rec.body) else {
         return;
     };
     rec.cells.count(points, &grid);

@@ -15,7 +15,7 @@
 //! section in `summary.json`.
 
 use regolith::bevy_ecs::prelude::*;
-use regolith::body::{Body, Points};
+use regolith::body::Points;
 use regolith::carry::{Carried, carried, restored};
 use regolith::condition::Condition;
 use regolith::glam::DVec2;
@@ -63,8 +63,10 @@ impl Condition for Driven {
     }
 
     fn install(&self, sim: &mut Install) {
+        let body = sim.body(&self.body);
         sim.insert_resource(Drive {
             spec: self.clone(),
+            body,
             force: DVec2::ZERO,
             contact: DVec2::ZERO,
             rows: Vec::new(),
@@ -136,6 +138,8 @@ pub struct Row {
 #[derive(Resource, Debug)]
 pub struct Drive {
     pub spec: Driven,
+    /// The driven body's entity, found at install.
+    pub body: Option<Entity>,
     /// The driver's force over the last step.
     pub force: DVec2,
     /// The contact force on the body over the last step.
@@ -146,10 +150,10 @@ pub struct Drive {
 /// Sets every node of the driven body to the prescribed velocity after contact, and keeps
 /// the force that took. The acceleration is corrected with the velocity, so the FLIP update
 /// of the body's points leaves them at the prescribed velocity too.
-fn drive(clock: Res<Clock>, mut state: ResMut<Drive>, mut bodies: Query<(&Body, &mut GridField)>) {
+fn drive(clock: Res<Clock>, mut state: ResMut<Drive>, mut bodies: Query<&mut GridField>) {
     let dt = clock.dt;
     let target = state.spec.velocity;
-    let Some((_, mut field)) = bodies.iter_mut().find(|(b, _)| b.name == state.spec.body) else {
+    let Some(mut field) = state.body.and_then(|e| bodies.get_mut(e).ok()) else {
         return;
     };
     let field = &mut *field;
@@ -174,9 +178,9 @@ fn record(
     dir: Res<RunDir>,
     faults: Res<OutputFaults>,
     mut state: ResMut<Drive>,
-    bodies: Query<(&Body, &Points)>,
+    bodies: Query<&Points>,
 ) {
-    let Some(points) = regolith::output::points_of(&bodies, &state.spec.body) else {
+    let Some(points) = regolith::output::points_of(&bodies, state.body) else {
         return;
     };
     let bottom = points
