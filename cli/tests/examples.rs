@@ -116,14 +116,17 @@ fn every_example_pastes_into_bash_and_loads_its_scene() {
             continue;
         }
         let line = line.trim();
-        let placeholder = line.contains('[') || line.contains("SCENE") || line.contains('|');
+        // A usage line (`[--out DIR]`, `SCENE.ron`, `A|B`, `key.path=value`), not a command.
+        let placeholder = |l: &str| {
+            l.contains('[') || l.contains("SCENE") || l.contains('|') || l.contains("key.path")
+        };
         if in_block && (line.starts_with("regolith ") || line.starts_with("cargo run")) {
-            if !placeholder {
+            if !placeholder(line) {
                 examples.push(line.to_string());
             }
         } else if !in_block {
             for code in inline_code(line) {
-                if code.starts_with("--set ") {
+                if code.starts_with("--set ") && !placeholder(code) {
                     let scene = "scenes/granular_column_collapse_a2.ron";
                     examples.push(format!("regolith check {scene} {code}"));
                 }
