@@ -15,6 +15,7 @@ mod active_nodes;
 mod apic;
 mod contact;
 mod elastic_verification;
+mod field_bodies;
 mod granular_update;
 mod integration_accuracy;
 mod integration_schemes;
