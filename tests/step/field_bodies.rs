@@ -50,7 +50,10 @@ fn a_field_body_evolves_alone_beside_another_field_body() {
         .velocity
         .iter()
         .any(|v| v.length() > 1e-6);
-    assert!(moved, "the block collapses under gravity, so the run tests something");
+    assert!(
+        moved,
+        "the block collapses under gravity, so the run tests something"
+    );
     let expected = alone.state_hash("left").unwrap();
     for other in [ps1("Nonlocal", 2.5e-3), ps1("MuI", 5.0e-3)] {
         let mut pair = run(Some(&other));
