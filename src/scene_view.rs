@@ -27,17 +27,7 @@ impl<'a> SceneView<'a> {
     /// The body called `name`, or a message naming the scene's bodies: what an item that
     /// names a body checks.
     pub fn body(&self, name: &str) -> Result<&'a BodySpec, String> {
-        self.bodies.iter().find(|b| b.name == name).ok_or_else(|| {
-            let names: Vec<String> = self
-                .bodies
-                .iter()
-                .map(|b| format!("\"{}\"", b.name))
-                .collect();
-            format!(
-                "body \"{name}\" is not in the scene (its bodies: {})",
-                names.join(", ")
-            )
-        })
+        body_named(self.bodies, name)
     }
 
     /// Every body, in the scene's order.
@@ -49,6 +39,18 @@ impl<'a> SceneView<'a> {
     pub fn grid(&self) -> GridGeometry {
         self.grid.clone()
     }
+}
+
+/// The body called `name` among `bodies`, or a message naming them all (the scene's
+/// `Scene::body` and the view's [`SceneView::body`]).
+pub(crate) fn body_named<'a>(bodies: &'a [BodySpec], name: &str) -> Result<&'a BodySpec, String> {
+    bodies.iter().find(|b| b.name == name).ok_or_else(|| {
+        let names: Vec<String> = bodies.iter().map(|b| format!("\"{}\"", b.name)).collect();
+        format!(
+            "body \"{name}\" is not in the scene (its bodies: {})",
+            names.join(", ")
+        )
+    })
 }
 
 /// One body.

@@ -95,13 +95,11 @@ impl<'a> StepOptions<'a> {
     }
 }
 
-/// The material updates: each touches only bodies of its own material, so they may run in
-/// any order relative to each other.
+/// The material updates (`per_material`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct MaterialUpdates;
 
-/// The field systems the materials hand over for one set; like the updates, each touches
-/// only its own material's bodies.
+/// The field systems the materials hand over for one set (`per_material`).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct FieldSystemsOf(StepSet);
 
@@ -191,18 +189,14 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
         if let Some(located) = field.located {
             core(
                 StepSet::ParticleToGrid,
-                located
-                    .in_set(FieldSystemsOf(StepSet::ParticleToGrid))
-                    .ambiguous_with(FieldSystemsOf(StepSet::ParticleToGrid))
+                per_material(located, FieldSystemsOf(StepSet::ParticleToGrid))
                     .after(scatter_gather::particle_to_grid),
             );
         }
         if let Some(before_update) = field.before_update {
             core(
                 StepSet::ConstitutiveUpdate,
-                before_update
-                    .in_set(FieldSystemsOf(StepSet::ConstitutiveUpdate))
-                    .ambiguous_with(FieldSystemsOf(StepSet::ConstitutiveUpdate))
+                per_material(before_update, FieldSystemsOf(StepSet::ConstitutiveUpdate))
                     .before(MaterialUpdates),
             );
         }
@@ -210,10 +204,7 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
     for material in &options.materials {
         core(
             StepSet::ConstitutiveUpdate,
-            material
-                .update_system()
-                .in_set(MaterialUpdates)
-                .ambiguous_with(MaterialUpdates),
+            per_material(material.update_system(), MaterialUpdates),
         );
     }
     core(StepSet::Clock, prepare::advance_clock.into_configs());
@@ -233,6 +224,13 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
             .into_configs(),
     );
     schedule
+}
+
+/// `systems` in `set`, in no order with the other systems of `set`: each is one material's
+/// and touches only the bodies carrying that material's state, so two of them never touch
+/// the same data.
+fn per_material(systems: Systems, set: impl SystemSet + Copy) -> Systems {
+    systems.in_set(set).ambiguous_with(set)
 }
 
 /// Chains the sets with a timing lap after each, and puts each set's core first.

@@ -123,10 +123,11 @@ impl Simulation {
     fn build(scene: &Scene, dir: Option<&std::path::Path>) -> std::io::Result<Simulation> {
         let grid = scene.grid();
         let mut world = World::new();
-        let multi_body = scene.bodies.len() > 1;
-        let mut schedule = build_schedule(&StepOptions::of(scene));
-        if multi_body {
-            scene.contact.insert_resources(&mut world);
+        let options = StepOptions::of(scene);
+        let mut schedule = build_schedule(&options);
+        // The contact law's resources, where the step runs its system (two bodies or more).
+        if let Some(contact) = options.contact {
+            contact.insert_resources(&mut world);
         }
         let mut tracked = Vec::new();
         for (index, spec) in scene.bodies.iter().enumerate() {

@@ -29,6 +29,7 @@ use crate::step::spacing::Spacing;
 use crate::transfer::{AffineFlip, Transfer};
 
 pub use crate::resources::{Dilatation, Segment, Side, StressUpdate, TimeStep, Wall, Walls};
+use crate::scene_view::body_named;
 pub use crate::scene_view::{BodySpec, InitialStress, SceneView};
 
 /// A whole scene file.
@@ -184,7 +185,7 @@ fn scene_names(message: &str) -> String {
 impl Scene {
     /// The body called `name`, or a message naming the scene's bodies.
     pub fn body(&self, name: &str) -> Result<&BodySpec, String> {
-        self.view().body(name)
+        body_named(&self.bodies, name)
     }
 
     /// What an item (an output, a condition) is checked against: the bodies and the grid.
