@@ -1,8 +1,8 @@
 //! Checkpoints: the whole state a step depends on, written bit for bit, so that a resumed
 //! run is bitwise identical to an uninterrupted one.
 //!
-//! What a step reads from the previous one: the clock, every body's points, point states and
-//! material history, the energy bound; and for the outputs the trajectory rows, the output
+//! What a step reads from the previous one: the clock, every body's points, point states,
+//! material history and field columns (`grid_field::FieldColumns`, by name), the energy bound; and for the outputs the trajectory rows, the output
 //! clock, and whatever each output and condition carries (`crate::carry`: its records, its
 //! schedule, the instant of an impact's first contact, the frames a collection lists). Grid
 //! fields, cell sums and whole-body measures are recomputed from the points, so they are not
@@ -17,13 +17,14 @@ use crate::body::{Body, BodyState, PointStates, Points};
 use crate::carry::{Carried, Partial};
 use crate::diagnostics::EnergyLimit;
 use crate::format::Seconds;
+use crate::grid_field::{Column, FieldColumns};
 use crate::output::write_atomic;
 use crate::resources::{Clock, OutputClock, StepRule};
 use crate::scene::Scene;
 use crate::sim::Simulation;
 
 /// Bumped whenever the layout changes; older files are refused with a message.
-const FORMAT: u32 = 6;
+const FORMAT: u32 = 7;
 
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {
@@ -70,6 +71,8 @@ struct BodyCheckpoint {
     points: Points,
     states: PointStates,
     history: Vec<u8>,
+    /// The columns of the body's fields (none for a body without fields).
+    columns: Vec<Column>,
 }
 
 impl Checkpoint {
@@ -80,24 +83,34 @@ impl Checkpoint {
         scene_file: &str,
         overrides: &[String],
     ) -> Checkpoint {
-        let mut q = sim
-            .world
-            .query::<(bevy_ecs::entity::Entity, &Body, &Points, &PointStates)>();
+        let mut q = sim.world.query::<(
+            bevy_ecs::entity::Entity,
+            &Body,
+            &Points,
+            &PointStates,
+            Option<&FieldColumns>,
+        )>();
         let mut found: Vec<_> = q
             .iter(&sim.world)
-            .map(|(e, b, p, s)| (b.index, e, b.name.clone(), p.clone(), s.clone()))
+            .map(|(e, b, p, s, c)| {
+                let columns = c.map_or(Vec::new(), |c| c.columns().to_vec());
+                (b.index, e, b.name.clone(), p.clone(), s.clone(), columns)
+            })
             .collect();
         found.sort_by_key(|f| f.0);
         let bodies = found
             .into_iter()
-            .map(|(index, entity, name, points, states)| BodyCheckpoint {
-                history: scene.bodies[index]
-                    .material
-                    .save_history(&sim.world, entity),
-                name,
-                points,
-                states,
-            })
+            .map(
+                |(index, entity, name, points, states, columns)| BodyCheckpoint {
+                    history: scene.bodies[index]
+                        .material
+                        .save_history(&sim.world, entity),
+                    name,
+                    points,
+                    states,
+                    columns,
+                },
+            )
             .collect();
         let world = &sim.world;
         let outputs = scene.outputs.iter().enumerate();
@@ -173,6 +186,14 @@ impl Checkpoint {
                 ));
             }
             e.insert((saved.points, saved.states, state));
+            match e.get_mut::<FieldColumns>() {
+                Some(mut columns) => columns.restore(saved.columns),
+                None if saved.columns.is_empty() => Ok(()),
+                None => {
+                    Err("the checkpoint carries field columns the scene's fields do not".into())
+                }
+            }
+            .map_err(|m| format!("body \"{}\": {m}", saved.name))?;
             scene.bodies[index]
                 .material
                 .load_history(&mut sim.world, entity, &saved.history)?;

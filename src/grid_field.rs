@@ -3,8 +3,9 @@
 //! points carry. The nonlocal granular fluidity (`material::nonlocal`) is built on it; a
 //! temperature, a pore pressure or a damage field would be built the same way.
 //!
-//! The points carry the field's state (in their material history, which the checkpoint
-//! saves); the grid only holds it long enough to apply an operator. A step of a grid field is:
+//! The points carry the field's state (in named columns, [`FieldColumns`], which the
+//! checkpoint saves); the grid only holds it long enough to apply an operator. A step of a
+//! grid field is:
 //!
 //! 1. [`scatter`]: each point hands the nodes of its footprint a weight and a value; a node's
 //!    value is the weighted mean `sum S w_p v_p / sum S w_p`. A node no point reaches (zero
@@ -16,21 +17,18 @@
 //!    inactive node, the operator reflects the field through the node (`v_{i+1} = v_{i-1}`):
 //!    zero flux across the material's edge, placed at its last active node.
 //! 3. [`gather_active`]: the result interpolated back to each point with its footprint (over
-//!    the active nodes, renormalised), into a
-//!    column of the body's [`PointFields`], which the constitutive update hands to
-//!    `Material::update` (module `material`) as `PointStep::fields`.
+//!    the active nodes, renormalised), into the field's columns of the body's
+//!    [`FieldColumns`], which the constitutive update hands to `Material::update` (module
+//!    `material`) by name as `PointStep::fields`.
 //!
-//! Where they run depends on what the field's law reads (the step's table, `schedule.rs`). A
-//! law of the point state at the start of the step runs in the `ParticleToGrid` set, after
-//! the scatter (`FieldSystems::located`): the footprints and the bands of the lock-free
-//! scatter then describe the points where they stand. A law that reads this step's velocity
-//! gradient or density (the fluidity's, which needs the elastic trial stress) runs first in
-//! `ConstitutiveUpdate`, after the move (`FieldSystems::before_update`): the footprints are
-//! still the start of the step's (the velocity gradient was gathered with them), but the
-//! bands have been rebuilt for the moved points, so such a field scatters with the bands kept
-//! from the start of the step ([`StartBands`]). A material declares the columns it reads
-//! (`Material::point_fields`) and hands over the systems that fill them
-//! (`Material::field_systems`); the step's builder places them.
+//! A field (`crate::field`: the nonlocal fluidity, a plugin's tracer) runs in its own set,
+//! `Fields`, after the move and before the constitutive update (the step's table,
+//! `schedule.rs`): so its law may read this step's velocity gradient and density (the
+//! fluidity's needs the elastic trial stress), and the material update reads its result. The
+//! footprints are then still the start of the step's (the velocity gradient was gathered
+//! with them), but the bands have been rebuilt for the moved points, so a field scatters
+//! with the bands kept from the start of the step ([`StartBands`], copied in
+//! `ParticleToGrid` by `keep_start_bands` whenever a body carries a field).
 
 use bevy_ecs::prelude::*;
 use glam::DVec2;
@@ -85,46 +83,153 @@ impl GridFields {
     }
 }
 
-/// Per-point values a body's material reads in its update (component): one row per point,
-/// one column per name, refilled every step by the systems of the material's grid fields.
-#[derive(Component, Clone, Debug, Default)]
-pub struct PointFields {
-    names: &'static [&'static str],
-    values: Vec<f64>,
+/// One named per-point column of a body's fields (`FieldColumns`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Column {
+    pub name: String,
+    /// One value per point, in the body's point order.
+    pub values: Vec<f64>,
 }
 
-impl PointFields {
-    pub fn new(names: &'static [&'static str], points: usize) -> Self {
-        PointFields {
-            names,
-            values: vec![0.0; names.len() * points],
+/// The per-point values a body's fields carry (component): one named column each, added by
+/// the fields when the body is built (`crate::field::Field::attach`), carried from step to
+/// step, saved and restored by checkpoints by name, and read by the body's material by name
+/// ([`FieldValues`]). A field writes only its own columns.
+#[derive(Component, Clone, Debug, Default)]
+pub struct FieldColumns {
+    columns: Vec<Column>,
+}
+
+impl FieldColumns {
+    /// Adds column `name` with `values`; an error if the body has it already (two fields
+    /// claiming one name).
+    pub fn add(&mut self, name: &str, values: Vec<f64>) -> Result<(), String> {
+        if self.get(name).is_some() {
+            return Err(format!(
+                "two fields of one body both carry a column \"{name}\""
+            ));
         }
+        self.columns.push(Column {
+            name: name.to_string(),
+            values,
+        });
+        Ok(())
     }
 
-    /// Point `k`'s row.
+    /// Column `name`, if the body has it.
+    pub fn get(&self, name: &str) -> Option<&[f64]> {
+        self.columns
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| c.values.as_slice())
+    }
+
+    /// Column `name`, mutable, if the body has it.
+    pub fn get_mut(&mut self, name: &str) -> Option<&mut [f64]> {
+        self.columns
+            .iter_mut()
+            .find(|c| c.name == name)
+            .map(|c| c.values.as_mut_slice())
+    }
+
+    /// Several distinct columns at once, mutable (a field advancing its state); an error
+    /// names a column the body lacks or one asked for twice.
+    pub fn many_mut<const N: usize>(
+        &mut self,
+        names: [&str; N],
+    ) -> Result<[&mut [f64]; N], String> {
+        let mut at = [0; N];
+        for (k, name) in names.iter().enumerate() {
+            at[k] = self
+                .columns
+                .iter()
+                .position(|c| c.name == *name)
+                .ok_or_else(|| format!("the body has no field column \"{name}\""))?;
+        }
+        let columns = self
+            .columns
+            .get_disjoint_mut(at)
+            .map_err(|_| format!("a column is asked for twice among {names:?}"))?;
+        Ok(columns.map(|c| c.values.as_mut_slice()))
+    }
+
+    /// Every column, in the order the fields added them.
+    pub fn columns(&self) -> &[Column] {
+        &self.columns
+    }
+
+    /// Puts back the columns a checkpoint saved: the same names, each as long as now, in
+    /// any order; an error names a column missing on either side.
+    pub fn restore(&mut self, saved: Vec<Column>) -> Result<(), String> {
+        if let Some(extra) = saved.iter().find(|s| self.get(&s.name).is_none()) {
+            return Err(format!(
+                "the checkpoint carries a field column \"{}\" that the scene's fields do not",
+                extra.name
+            ));
+        }
+        for column in &mut self.columns {
+            let Some(s) = saved.iter().find(|s| s.name == column.name) else {
+                return Err(format!(
+                    "the checkpoint has no field column \"{}\" (a field added since it was written)",
+                    column.name
+                ));
+            };
+            if s.values.len() != column.values.len() {
+                return Err(format!(
+                    "the checkpoint's field column \"{}\" has {} values for {} points",
+                    column.name,
+                    s.values.len(),
+                    column.values.len()
+                ));
+            }
+            column.values.clone_from(&s.values);
+        }
+        Ok(())
+    }
+}
+
+/// The field values one point's material update reads (`material::PointStep::fields`): the
+/// columns its material declares (`Material::point_fields`), found by name.
+#[derive(Clone, Copy, Debug)]
+pub struct FieldValues<'a> {
+    columns: &'a [(&'a str, &'a [f64])],
+    point: usize,
+}
+
+impl<'a> FieldValues<'a> {
+    /// No field at all (a material that reads none, or a test of one point).
+    pub const NONE: FieldValues<'static> = FieldValues {
+        columns: &[],
+        point: 0,
+    };
+
+    /// Point `point`'s values of `columns` (name and column).
+    pub fn new(columns: &'a [(&'a str, &'a [f64])], point: usize) -> Self {
+        FieldValues { columns, point }
+    }
+
+    /// The value of column `name` at the point; `None` if it is not among the columns.
     #[inline]
-    pub fn row(&self, k: usize) -> &[f64] {
-        let n = self.names.len();
-        &self.values[k * n..(k + 1) * n]
-    }
-
-    /// Sets column `column` of every row from `value(k)`, in parallel.
-    pub fn fill(&mut self, column: usize, value: impl Fn(usize) -> f64 + Sync) {
-        let n = self.names.len();
-        assert!(column < n, "column {column} of {n}");
-        self.values
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(k, row)| row[column] = value(k));
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.columns
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, c)| c[self.point])
     }
 }
 
 /// A body's bands as they were when its footprints were found (component): the scatter of a
-/// field computed after the move, when [`Bands`] already describes the moved points. A
-/// material whose field runs after the move copies them in `ParticleToGrid`, after its core
-/// (`material::nonlocal::keep_start_bands`).
+/// field, which runs after the move, when [`Bands`] already describes the moved points.
 #[derive(Component, Clone, Debug, Default)]
 pub struct StartBands(pub Bands);
+
+/// Keeps the bands of every body carrying a field as they are when its footprints are found
+/// ([`StartBands`]; in `ParticleToGrid`, after the scatter).
+pub fn keep_start_bands(mut bodies: Query<(&Bands, &mut StartBands)>) {
+    for (bands, mut kept) in &mut bodies {
+        kept.0.clone_from(bands);
+    }
+}
 
 /// What a wall imposes on a grid field at its nodes.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]

@@ -20,6 +20,7 @@ pub mod contact;
 pub mod defaults;
 pub mod diagnostics;
 pub mod error;
+pub mod field;
 pub mod fill;
 pub mod format;
 pub mod geometry;

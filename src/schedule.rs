@@ -4,7 +4,7 @@
 //! set                 core systems, in the order they run; {A,B}: only when A and B hold
 //! Prepare             choose_time_step clear_grids
 //! ParticleToGrid      locate_points<S> average_stress_trace particle_to_grid
-//!                     keep_start_bands{Nonlocal}
+//!                     keep_start_bands{Fields}
 //! GridUpdate          update_grid
 //! Contact             no_slip{NoSlip} frictional{Frictional}
 //! GridToParticle      grid_to_particle{Usl,!affine} affine_to_particle<S>{Usl,affine}
@@ -12,7 +12,8 @@
 //!                     musl_apic_gradient<S>{Musl,affine} average_dilatation{CellAveraged}
 //! Move                advect_points correct_spacing{DeltaCorrection}
 //!                     point_density{PerPoint} cell_density{CellAveraged}
-//! ConstitutiveUpdate  advance_fluidity{Nonlocal} update_stress<M>
+//! Fields              advance_fluidity{Nonlocal} <F>
+//! ConstitutiveUpdate  update_stress<M>
 //! Clock               advance_clock
 //! Diagnostics         survey_bodies check_energy decide_output
 //! Output              record_trajectory
@@ -20,9 +21,11 @@
 //!
 //! `S` is the scene's shape functions (`integration`), handed over by that item
 //! ([`ShapeFunctions::weighted_systems`]); `M` is each material of the scene, once, in any
-//! order among themselves (each touches only its own bodies), with the field systems a
-//! material hands over ([`MaterialSpec::field_systems`]: the nonlocal fluidity's two here)
-//! in the places shown; the Contact set holds the contact law's system
+//! order among themselves (each touches only its own bodies). `<F>` is the system of each
+//! kind of field the scene lists (`fields`, a plugin's: [`Field::system`]), once, in any
+//! order among themselves and with the fields materials bring (`Nonlocal`'s fluidity,
+//! `advance_fluidity`): each writes only its own columns; `Fields` holds when any body
+//! carries a field. The Contact set holds the contact law's system
 //! ([`Contact::system`]) in scenes of two or more bodies and nothing otherwise. `Usl`/`Musl`
 //! is the scene's `update`, `PerPoint`/`CellAveraged` its `dilatation`, `affine` whether its
 //! `transfer` carries an affine field, `DeltaCorrection` its `spacing`. The test
@@ -48,8 +51,10 @@ use bevy_ecs::system::ScheduleSystem;
 
 use crate::contact::Contact;
 use crate::diagnostics;
+use crate::field::Field;
+use crate::grid_field::keep_start_bands;
 use crate::integration::ShapeFunctions;
-use crate::material::{FieldSystems, MaterialSpec};
+use crate::material::MaterialSpec;
 use crate::output::trajectory;
 use crate::resources::{Dilatation, StressUpdate};
 use crate::scene::Scene;
@@ -72,6 +77,9 @@ pub struct StepOptions<'a> {
     pub contact: Option<&'a dyn Contact>,
     /// Each material of the scene, once.
     pub materials: Vec<&'a dyn MaterialSpec>,
+    /// Each kind of field of the scene, once: those its materials bring, then those it
+    /// lists.
+    pub fields: Vec<Box<dyn Field>>,
 }
 
 impl<'a> StepOptions<'a> {
@@ -83,6 +91,14 @@ impl<'a> StepOptions<'a> {
                 materials.push(&*body.material);
             }
         }
+        let brought = materials.iter().flat_map(|m| m.fields());
+        let listed = scene.fields.iter().map(|f| f.0.clone());
+        let mut fields: Vec<Box<dyn Field>> = Vec::new();
+        for field in brought.chain(listed) {
+            if !fields.iter().any(|f| f.name() == field.name()) {
+                fields.push(field);
+            }
+        }
         StepOptions {
             integration: &*scene.integration,
             update: scene.update,
@@ -91,6 +107,7 @@ impl<'a> StepOptions<'a> {
             spacing: scene.spacing,
             contact: (scene.bodies.len() > 1).then_some(&*scene.contact),
             materials,
+            fields,
         }
     }
 }
@@ -99,9 +116,9 @@ impl<'a> StepOptions<'a> {
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct MaterialUpdates;
 
-/// The field systems the materials hand over for one set (`per_material`).
+/// The fields' systems (`per_material`: the same holds of them).
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-struct FieldSystemsOf(StepSet);
+struct FieldUpdates;
 
 /// The timing lap after a set.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -119,11 +136,6 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
     });
     configure_sets(&mut schedule);
     let weighted = options.integration.weighted_systems();
-    let fields: Vec<FieldSystems> = options
-        .materials
-        .iter()
-        .map(|m| m.field_systems())
-        .collect();
     let mut core = |set: StepSet, systems: Systems| {
         schedule.add_systems(systems.in_set(Core(set)));
     };
@@ -132,14 +144,18 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
         StepSet::Prepare,
         (prepare::choose_time_step, prepare::clear_grids).chain(),
     );
+    let scatter = (
+        weighted.locate,
+        cell_average::average_stress_trace,
+        scatter_gather::particle_to_grid,
+    );
     core(
         StepSet::ParticleToGrid,
-        (
-            weighted.locate,
-            cell_average::average_stress_trace,
-            scatter_gather::particle_to_grid,
-        )
-            .chain(),
+        if options.fields.is_empty() {
+            scatter.chain()
+        } else {
+            (scatter.chain(), keep_start_bands).chain()
+        },
     );
     core(StepSet::GridUpdate, update_grid.into_configs());
     if let Some(contact) = options.contact {
@@ -185,21 +201,8 @@ pub fn build_schedule(options: &StepOptions) -> Schedule {
             _ => (scatter_gather::advect_points, density).chain(),
         },
     );
-    for field in fields {
-        if let Some(located) = field.located {
-            core(
-                StepSet::ParticleToGrid,
-                per_material(located, FieldSystemsOf(StepSet::ParticleToGrid))
-                    .after(scatter_gather::particle_to_grid),
-            );
-        }
-        if let Some(before_update) = field.before_update {
-            core(
-                StepSet::ConstitutiveUpdate,
-                per_material(before_update, FieldSystemsOf(StepSet::ConstitutiveUpdate))
-                    .before(MaterialUpdates),
-            );
-        }
+    for field in &options.fields {
+        core(StepSet::Fields, per_material(field.system(), FieldUpdates));
     }
     for material in &options.materials {
         core(

@@ -8,8 +8,10 @@ use glam::{DMat2, DVec2};
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
+use crate::field::Field;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
+use crate::grid_field::{FieldColumns, GridFields, StartBands};
 use crate::obstacle::Obstacles;
 use crate::output::trajectory::Trajectory;
 use crate::output::{OutputFaults, RunDir};
@@ -191,6 +193,25 @@ impl Simulation {
                 Surveys::default(),
             ));
             spec.material.attach(&mut entity, n);
+            // The fields the body carries: its material's, then those the scene lists for it.
+            let brought = spec.material.fields();
+            let listed = scene.fields.iter().map(|f| &f.0);
+            let listed = listed.filter(|f| f.body() == Some(spec.name.as_str()));
+            let fields: Vec<&dyn Field> = brought
+                .iter()
+                .map(|f| &**f)
+                .chain(listed.map(|f| &**f))
+                .collect();
+            if !fields.is_empty() {
+                entity.insert((
+                    FieldColumns::default(),
+                    GridFields::default(),
+                    StartBands::default(),
+                ));
+                for field in fields {
+                    field.attach(&mut entity);
+                }
+            }
             if scene.dilatation == Dilatation::CellAveraged {
                 entity.insert(CellDilatation::new(grid.cells[0] * grid.cells[1]));
             }

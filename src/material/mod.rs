@@ -21,7 +21,8 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::body::{Phase, PointStates, Points, inertial_number};
-use crate::grid_field::{GridFields, PointFields, StartBands};
+use crate::field::Field;
+use crate::grid_field::{FieldColumns, FieldValues};
 use crate::registry::{DynItem, Item};
 use crate::resources::Clock;
 use crate::stress::Stress;
@@ -35,9 +36,21 @@ pub struct PointStep<'a> {
     /// Current mass density with the volume already updated this step: the point's `m/V`,
     /// or the mean over its cell with cell-averaged dilatation.
     pub density: f64,
-    /// The values of the material's grid fields at the point, in the order of
-    /// [`Material::point_fields`] (empty for a material without any; `crate::grid_field`).
-    pub fields: &'a [f64],
+    /// The values at the point of the field columns the material reads
+    /// ([`Material::point_fields`]), by name: `step.fields.get("fluidity_interpolated")`.
+    pub fields: FieldValues<'a>,
+}
+
+impl PointStep<'static> {
+    /// A step that reads no field.
+    pub fn new(velocity_gradient: DMat2, dt: f64, density: f64) -> Self {
+        PointStep {
+            velocity_gradient,
+            dt,
+            density,
+            fields: FieldValues::NONE,
+        }
+    }
 }
 
 /// A material model: an [`Item`] (its scene name and parameter checks) that implements
@@ -73,16 +86,16 @@ pub trait Material: Item {
     fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {
         Ok(())
     }
-    /// The per-point values of grid fields this material reads in [`Material::update`]
-    /// (`PointStep::fields`), which the systems of [`Material::field_systems`] fill;
-    /// none by default.
+    /// The field columns this material reads in [`Material::update`] (`PointStep::fields`),
+    /// by name: a field of the body must carry each (its own, [`Material::fields`], or one
+    /// the scene lists); none by default.
     fn point_fields() -> &'static [&'static str] {
         &[]
     }
-    /// The systems that fill [`Material::point_fields`] each step, each for its place
-    /// ([`FieldSystems`]; `crate::grid_field` says what they do); none by default.
-    fn field_systems() -> FieldSystems {
-        FieldSystems::default()
+    /// The fields this material brings to each of its bodies (`crate::field`: `Nonlocal`'s
+    /// fluidity); none by default.
+    fn fields(&self) -> Vec<Box<dyn Field>> {
+        Vec::new()
     }
     /// Advances one point's stress and history over one step; returns the point's plastic
     /// shear strain rate and phase.
@@ -92,18 +105,6 @@ pub trait Material: Item {
         history: &mut Self::History,
         step: &PointStep,
     ) -> PointOutcome;
-}
-
-/// The systems that fill a material's grid fields, each for its place in the step (the
-/// table of `schedule.rs`). Like the update, each must touch only bodies of its own
-/// material, so that materials' systems need no order among themselves.
-#[derive(Default)]
-pub struct FieldSystems {
-    /// At the start of the step, once the points are located and scattered
-    /// (ParticleToGrid).
-    pub located: Option<ScheduleConfigs<ScheduleSystem>>,
-    /// After the move, before the material updates (ConstitutiveUpdate).
-    pub before_update: Option<ScheduleConfigs<ScheduleSystem>>,
 }
 
 /// What one constitutive update reports about its point.
@@ -128,8 +129,10 @@ pub trait MaterialSpec: DynItem {
     fn attach(&self, entity: &mut EntityWorldMut, points: usize);
     /// This material's update system (the step runs one per material type of a scene).
     fn update_system(&self) -> ScheduleConfigs<ScheduleSystem>;
-    /// The systems that fill the material's grid fields ([`Material::field_systems`]).
-    fn field_systems(&self) -> FieldSystems;
+    /// The field columns the material reads ([`Material::point_fields`]).
+    fn point_fields(&self) -> &'static [&'static str];
+    /// The fields the material brings to its bodies ([`Material::fields`]).
+    fn fields(&self) -> Vec<Box<dyn Field>>;
     /// Bytes of history per point (for memory estimates).
     fn history_bytes(&self) -> usize;
     /// The body's per-point history, encoded for a checkpoint.
@@ -167,21 +170,17 @@ impl<M: Material> MaterialSpec for M {
             params: self.clone(),
             history: vec![M::History::default(); points],
         });
-        if !M::point_fields().is_empty() {
-            entity.insert((
-                PointFields::new(M::point_fields(), points),
-                GridFields::default(),
-                StartBands::default(),
-            ));
-        }
     }
     fn update_system(&self) -> ScheduleConfigs<ScheduleSystem> {
         // It only touches bodies carrying this material's state, so the step may run it in
         // any order with other materials' updates.
         update_stress::<M>.into_configs()
     }
-    fn field_systems(&self) -> FieldSystems {
-        M::field_systems()
+    fn point_fields(&self) -> &'static [&'static str] {
+        M::point_fields()
+    }
+    fn fields(&self) -> Vec<Box<dyn Field>> {
+        Material::fields(self)
     }
     fn history_bytes(&self) -> usize {
         std::mem::size_of::<M::History>()
@@ -223,11 +222,23 @@ pub fn update_stress<M: Material>(
         &mut Points,
         &mut PointStates,
         &mut MaterialState<M>,
-        Option<&PointFields>,
+        Option<&FieldColumns>,
     )>,
 ) {
     let dt = clock.dt;
-    for (mut points, mut states, mut state, fields) in &mut bodies {
+    for (mut points, mut states, mut state, columns) in &mut bodies {
+        // The columns the material reads, found by name once per body (the scene check has
+        // made sure the body's fields carry them).
+        let read: Vec<(&str, &[f64])> = M::point_fields()
+            .iter()
+            .map(|&name| {
+                let column = columns.and_then(|c| c.get(name));
+                (
+                    name,
+                    column.unwrap_or_else(|| panic!("no field carries column {name}")),
+                )
+            })
+            .collect();
         // The stress update never moves a point, so it leaves `Points` unmarked: the cells
         // found after this step's move stay current for the next step (`step::Location`).
         let points = points.bypass_change_detection();
@@ -255,7 +266,7 @@ pub fn update_stress<M: Material>(
                         velocity_gradient: l,
                         dt,
                         density,
-                        fields: fields.map_or(&[], |f| f.row(k)),
+                        fields: FieldValues::new(&read, k),
                     };
                     let outcome = params.update(stress, history, &step);
                     *rate = outcome.plastic_strain_rate;

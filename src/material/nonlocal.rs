@@ -12,8 +12,9 @@
 //! How a step advances it, per body of this material (docs/model.md §4.2). The fluidity's
 //! equation is solved on the grid's nodes, and each point carries the nodal increments, the
 //! usual treatment of a diffused field in MPM (as thermal and damage fields are):
-//! 1. `advance_fluidity` (a grid field, `crate::grid_field`, first in `ConstitutiveUpdate`,
-//!    once the velocity gradient and the density are known): each point's elastic trial stress; the
+//! 1. `advance_fluidity` (the system of the [`Fluidity`] field, `crate::field`, in the
+//!    `Fields` set, once the velocity gradient and the density are known; the points' `g`
+//!    and seeding flag are the field's columns, [`FLUIDITY`] and [`SEEDED`]): each point's elastic trial stress; the
 //!    seeding rule (below) on its `g`; the dense points' `g` and trial pressure `p` scattered
 //!    to the nodes with their volumes as weights; the nodal Laplacian of `g` with the walls'
 //!    conditions (`g = 0` on no-slip walls, zero flux elsewhere, settable per wall); each
@@ -31,7 +32,8 @@
 //!    Each point then adds the interpolated increment `sum N (g_new - g_old)` to its `g`
 //!    (over the active nodes, renormalised: `grid_field::gather_active`).
 //! 2. The update (per point): the elastic trial again, and the return with `g_hat`, the new
-//!    nodal fluidity at the centre of the point's cell (`grid_field::at_cell_centre`):
+//!    nodal fluidity at the centre of the point's cell (`grid_field::at_cell_centre`, left in
+//!    column [`INTERPOLATED`] by the field, which the material reads by name):
 //!    `tau = tau_tr p/(p + G dt g_hat)`, `gamma_dot_p = g_hat mu`. The velocity gradient is
 //!    constant over a cell, so a `g_hat` interpolated to each point would make the points of
 //!    a cell return to ratios in inverse proportion to their `g_hat` (three to one in the
@@ -73,13 +75,18 @@ use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 
 use super::granular::{TransPhase, check_positive, trans_phase_params};
-use super::{FieldSystems, Material, MaterialState, PointOutcome, PointStep};
+use bevy_ecs::schedule::ScheduleConfigs;
+use bevy_ecs::system::ScheduleSystem;
+use bevy_ecs::world::EntityWorldMut;
+
+use super::{Material, MaterialState, PointOutcome, PointStep};
 use crate::body::{Phase, PointStates, Points};
+use crate::field::Field;
 use crate::grid::GridGeometry;
-use crate::grid_field::{self, FieldWalls, GridFields, NodeCondition, PointFields, StartBands};
+use crate::grid_field::{self, FieldColumns, FieldWalls, GridFields, NodeCondition, StartBands};
 use crate::registry::Item;
 use crate::resources::{Boundaries, Clock, Wall, Walls};
-use crate::step::{Bands, Location};
+use crate::step::Location;
 use crate::stress::Stress;
 
 /// The nonlocal amplitude `A` unless the scene gives one: Henann & Kamrin's (2013) calibration
@@ -104,9 +111,14 @@ const TOLERANCE: f64 = 1e-13;
 /// And gives up after this many steps (bisection alone would halve the bracket this often).
 const MAX_ITERATIONS: usize = 200;
 
-/// The grid field's column: the fluidity interpolated from the nodes at each point, which the
-/// return uses.
-const INTERPOLATED: &[&str] = &["fluidity_interpolated"];
+/// The fluidity's columns (`Fluidity`, a field of every `Nonlocal` body): each point's `g`
+/// (1/s; zero on a disconnected point), its seeding flag (1 when seeded, or flowing, since
+/// its trial ratio last sat at or below `mu_s`; else 0), and the nodes' fluidity at the
+/// centre of its cell after the step's advance, which the return reads (`g_hat`).
+pub const FLUIDITY: &str = "fluidity";
+pub const SEEDED: &str = "fluidity_seeded";
+pub const INTERPOLATED: &str = "fluidity_interpolated";
+const COLUMNS: &[&str] = &[FLUIDITY, SEEDED, INTERPOLATED];
 
 /// What a wall imposes on the fluidity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -205,13 +217,30 @@ impl TryFrom<NonlocalParams> for Nonlocal {
     }
 }
 
-/// A point's fluidity and what the seeding rule remembers.
+/// A point's fluidity and what the seeding rule remembers (its columns [`FLUIDITY`] and
+/// [`SEEDED`], as the seeding rule reads them).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct FluidityHistory {
     /// `g` (1/s); zero on a disconnected point.
     pub fluidity: f64,
     /// Seeded, or flowing, since the trial ratio last sat at or below `mu_s`.
     pub seeded: bool,
+}
+
+impl FluidityHistory {
+    /// Runs `edit` on the point whose columns hold `g` and `seeded`, and writes back what it
+    /// leaves.
+    #[inline]
+    fn edit<R>(g: &mut f64, seeded: &mut f64, edit: impl FnOnce(&mut Self) -> R) -> R {
+        let mut history = FluidityHistory {
+            fluidity: *g,
+            seeded: *seeded != 0.0,
+        };
+        let out = edit(&mut history);
+        *g = history.fluidity;
+        *seeded = if history.seeded { 1.0 } else { 0.0 };
+        out
+    }
 }
 
 impl Nonlocal {
@@ -360,21 +389,14 @@ impl Nonlocal {
     }
 
     /// One point's update: the elastic trial and the return with the fluidity interpolated
-    /// from the nodes, `step.fields[0]` (`g_hat`; module docs). A disconnected point's
-    /// fluidity is cleared.
-    pub fn update_point(
-        &self,
-        stress: &mut Stress,
-        history: &mut FluidityHistory,
-        step: &PointStep,
-    ) -> PointOutcome {
+    /// from the nodes, column [`INTERPOLATED`] of `step.fields` (`g_hat`; module docs). (A
+    /// disconnected point's own fluidity is cleared by the field, `advance_fluidity`, which
+    /// finds it disconnected by the same trial.)
+    pub fn update_point(&self, stress: &mut Stress, step: &PointStep) -> PointOutcome {
         let m = &self.base;
         let trial = match m.dense_trial(stress, step) {
             Ok(trial) => trial,
-            Err(disconnected) => {
-                *history = FluidityHistory::default();
-                return disconnected;
-            }
+            Err(disconnected) => return disconnected,
         };
         let p = trial.pressure();
         let tau_trial = trial.equivalent_shear();
@@ -382,7 +404,7 @@ impl Nonlocal {
         // The nodes solve for `mu < mu_2`; a point whose trial shear is above its nodes'
         // mean could still return above `mu_2`, where the fluidity would grow without bound,
         // so it takes at least the fluidity that brings it onto `mu_2`.
-        let g_hat = step.fields.first().copied().unwrap_or(0.0);
+        let g_hat = step.fields.get(INTERPOLATED).unwrap_or(0.0);
         let g = g_hat.max((tau_trial / m.mu_2 - p) / gdt);
         if gdt * g < f64::EPSILON * p {
             *stress = trial;
@@ -405,7 +427,8 @@ impl Item for Nonlocal {
 }
 
 impl Material for Nonlocal {
-    type History = FluidityHistory;
+    /// None: the fluidity is a field of its own ([`Fluidity`]).
+    type History = ();
 
     fn density(&self) -> f64 {
         self.base.critical_density
@@ -442,45 +465,59 @@ impl Material for Nonlocal {
         ))
     }
     fn point_fields() -> &'static [&'static str] {
-        INTERPOLATED
+        &[INTERPOLATED]
     }
-    fn field_systems() -> FieldSystems {
-        FieldSystems {
-            located: Some(keep_start_bands.into_configs()),
-            before_update: Some(advance_fluidity.into_configs()),
+    fn fields(&self) -> Vec<Box<dyn Field>> {
+        vec![Box::new(Fluidity)]
+    }
+    fn update(&self, stress: &mut Stress, _: &mut (), step: &PointStep) -> PointOutcome {
+        self.update_point(stress, step)
+    }
+}
+
+/// The fluidity as a field (`crate::field`): the one every `Nonlocal` body carries, its
+/// columns [`FLUIDITY`], [`SEEDED`] and [`INTERPOLATED`], advanced by [`advance_fluidity`]
+/// with its body's material parameters. Scenes do not list it: the material brings it.
+#[derive(Clone, Copy, Debug, Deserialize)]
+pub struct Fluidity;
+
+impl Item for Fluidity {
+    const NAME: &'static str = "Fluidity";
+    const UNIT: bool = true;
+}
+
+impl Field for Fluidity {
+    fn columns(&self) -> &'static [&'static str] {
+        COLUMNS
+    }
+    /// Its bodies are found by their `MaterialState<Nonlocal>`; its columns start at zero
+    /// (at rest, not seeded).
+    fn attach(&self, body: &mut EntityWorldMut) {
+        let points = body.get::<Points>().map_or(0, Points::len);
+        let mut columns = body
+            .get_mut::<FieldColumns>()
+            .expect("the builder gives a body with fields its columns");
+        for name in COLUMNS {
+            columns
+                .add(name, vec![0.0; points])
+                .expect("a Nonlocal body carries one fluidity");
         }
     }
-    fn update(
-        &self,
-        stress: &mut Stress,
-        history: &mut FluidityHistory,
-        step: &PointStep,
-    ) -> PointOutcome {
-        self.update_point(stress, history, step)
+    fn system(&self) -> ScheduleConfigs<ScheduleSystem> {
+        advance_fluidity.into_configs()
     }
 }
 
 /// What the fluidity's grid field reads and writes of a body.
 type FluidityBody<'a> = (
-    &'a mut MaterialState<Nonlocal>,
+    &'a MaterialState<Nonlocal>,
     &'a Points,
     &'a PointStates,
     &'a Location,
     &'a StartBands,
     &'a mut GridFields,
-    &'a mut PointFields,
+    &'a mut FieldColumns,
 );
-
-/// Keeps the bands of every body of this material as they are when its footprints are found
-/// ([`StartBands`]): the fluidity is scattered after the move, when the bands describe the
-/// moved points.
-pub fn keep_start_bands(
-    mut bodies: Query<(&Bands, &mut StartBands), With<MaterialState<Nonlocal>>>,
-) {
-    for (bands, mut kept) in &mut bodies {
-        kept.0.clone_from(bands);
-    }
-}
 
 /// What the fluidity's step knows of a point after its elastic trial.
 #[derive(Clone, Copy, Debug, Default)]
@@ -512,49 +549,54 @@ pub fn advance_fluidity(
 ) {
     let dt = clock.dt;
     let scratch = &mut *scratch;
-    for (mut state, points, states, location, bands, mut nodal, mut at_points) in &mut bodies {
-        let state = &mut *state;
-        let (params, history) = (&state.params, &mut state.history);
+    for (state, points, states, location, bands, mut nodal, mut columns) in &mut bodies {
+        let params = &state.params;
+        let [fluidity_at, seeded_at, interpolated] = columns
+            .many_mut([FLUIDITY, SEEDED, INTERPOLATED])
+            .expect("a Nonlocal body carries the fluidity's columns");
         let walls = params.walls.resolve(&boundaries.0);
         // The elastic trial of every point, and the seeding rule on the dense ones.
         scratch.trials.clear();
-        scratch
-            .trials
-            .par_extend(history.par_iter_mut().enumerate().map(|(k, history)| {
-                if points.mass[k] == 0.0 {
-                    return Trial::Out;
-                }
-                let step = PointStep {
-                    velocity_gradient: points.velocity_gradient[k],
-                    dt,
-                    density: points.density[k],
-                    fields: &[],
-                };
-                let mut stress = points.stress[k];
-                let Ok(trial) = params.base.dense_trial(&mut stress, &step) else {
-                    *history = FluidityHistory::default();
-                    return Trial::Out;
-                };
-                let (p, tau) = (trial.pressure(), trial.equivalent_shear());
-                if states.phase[k] == Phase::Disconnected {
-                    return Trial::Reconnecting { p, tau };
-                }
-                params.seed(history, p, tau / p);
-                Trial::Dense { p, tau }
-            }));
+        scratch.trials.par_extend(
+            fluidity_at
+                .par_iter_mut()
+                .zip(seeded_at.par_iter_mut())
+                .enumerate()
+                .map(|(k, (g, seeded))| {
+                    FluidityHistory::edit(g, seeded, |history| {
+                        if points.mass[k] == 0.0 {
+                            *history = FluidityHistory::default();
+                            return Trial::Out;
+                        }
+                        let step =
+                            PointStep::new(points.velocity_gradient[k], dt, points.density[k]);
+                        let mut stress = points.stress[k];
+                        let Ok(trial) = params.base.dense_trial(&mut stress, &step) else {
+                            *history = FluidityHistory::default();
+                            return Trial::Out;
+                        };
+                        let (p, tau) = (trial.pressure(), trial.equivalent_shear());
+                        if states.phase[k] == Phase::Disconnected {
+                            return Trial::Reconnecting { p, tau };
+                        }
+                        params.seed(history, p, tau / p);
+                        Trial::Dense { p, tau }
+                    })
+                }),
+        );
         let trials = &scratch.trials;
         let dense = |k: usize| match trials[k] {
             Trial::Dense { p, tau } => Some((points.volume[k], p, tau)),
             _ => None,
         };
-        let history_now = &*history;
+        let fluidity_now = &*fluidity_at;
         let mut fluidity = std::mem::take(nodal.field_mut("fluidity"));
         let mut pressure = std::mem::take(nodal.field_mut("trial_pressure"));
         let mut ratio = std::mem::take(nodal.field_mut("trial_ratio"));
         let mut laplacian = std::mem::take(&mut nodal.field_mut("fluidity_laplacian").value);
         let bands = &bands.0;
         grid_field::scatter(&grid, location, bands, &mut fluidity, |k| {
-            dense(k).map(|(v, _, _)| (v, history_now[k].fluidity))
+            dense(k).map(|(v, _, _)| (v, fluidity_now[k]))
         });
         grid_field::scatter(&grid, location, bands, &mut pressure, |k| {
             dense(k).map(|(v, p, _)| (v, p))
@@ -598,10 +640,11 @@ pub fn advance_fluidity(
         // The points: the increment on dense ones, the nodes' fluidity on reconnecting ones
         // (over the active nodes of their footprints; a point that reaches none keeps its `g`,
         // or is seeded if it reconnects).
-        history.par_iter_mut().enumerate().for_each(|(k, history)| {
+        let each = fluidity_at.par_iter_mut().zip(seeded_at.par_iter_mut());
+        each.enumerate().for_each(|(k, (g, seeded))| {
             let interpolated =
                 || grid_field::gather_active(location, &fluidity, [next, increment], k);
-            match trials[k] {
+            FluidityHistory::edit(g, seeded, |history| match trials[k] {
                 Trial::Out => {}
                 // Not clipped at zero: the point's `g` is the nodes' plus what the grid
                 // cannot see, which may be of either sign; only nodal values (and so
@@ -618,14 +661,17 @@ pub fn advance_fluidity(
                     }
                     None => params.seed(history, p, tau / p),
                 },
-            }
+            })
         });
-        let history = &*history;
+        let fluidity_now = &*fluidity_at;
         // The return's fluidity: the nodes' at the centre of the point's cell (module docs).
-        at_points.fill(0, |k| {
-            grid_field::at_cell_centre(&grid, &fluidity, next, points.position[k])
-                .unwrap_or(history[k].fluidity)
-        });
+        interpolated
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, g_hat)| {
+                *g_hat = grid_field::at_cell_centre(&grid, &fluidity, next, points.position[k])
+                    .unwrap_or(fluidity_now[k]);
+            });
         *nodal.field_mut("fluidity") = fluidity;
         *nodal.field_mut("trial_pressure") = pressure;
         *nodal.field_mut("trial_ratio") = ratio;

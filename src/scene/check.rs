@@ -2,7 +2,7 @@
 
 use std::collections::HashSet;
 
-use super::{InitialStress, Scene, StressUpdate, TimeStep, Wall};
+use super::{BodySpec, InitialStress, Scene, StressUpdate, TimeStep, Wall};
 use crate::error::SceneError;
 use crate::fill::fill;
 use crate::geometry::Shape;
@@ -137,6 +137,83 @@ impl Scene {
             .map(|b| b.material.wave_speed() + b.velocity.length())
             .fold(0.0, f64::max);
         Some(dt * signal / self.grid().cell_size)
+    }
+
+    /// The largest step body `b` can take: the fixed one, or its CFL limit at rest.
+    fn largest_step(&self, b: &BodySpec) -> f64 {
+        match self.time.step {
+            TimeStep::Fixed(dt) => dt,
+            TimeStep::Cfl(c) => c * self.grid().cell_size / b.material.wave_speed(),
+        }
+    }
+
+    /// The fields the scene lists, and the columns each body's fields carry against what its
+    /// material reads (module `field`).
+    fn check_fields(&self, text: &str, origin: &str) -> Result<(), SceneError> {
+        let view = self.view();
+        let h = self.grid().cell_size;
+        for field in &self.fields {
+            let name = field.name();
+            let at = |message: String| {
+                near(
+                    text,
+                    origin,
+                    &format!("{name}("),
+                    format!("{name}: {message}"),
+                )
+            };
+            let Some(body) = field.body() else {
+                return Err(at(
+                    "a field the scene lists names the body it lives on (body: \"name\")".into(),
+                ));
+            };
+            let b = self.body(body).map_err(at)?;
+            field.check_scene(&view).map_err(at)?;
+            field.check_step(h, self.largest_step(b)).map_err(at)?;
+        }
+        for b in &self.bodies {
+            let brought = b.material.fields();
+            let listed = self
+                .fields
+                .iter()
+                .filter(|f| f.body() == Some(b.name.as_str()));
+            let mut carried: Vec<(&str, &str)> = Vec::new();
+            for field in brought.iter().chain(listed.map(|f| &f.0)) {
+                for column in field.columns() {
+                    if let Some((_, first)) = carried.iter().find(|(c, _)| c == column) {
+                        return Err(near(
+                            text,
+                            origin,
+                            &format!("{}(", field.name()),
+                            format!(
+                                "{}: body \"{}\" carries the column \"{column}\" already (from {first}); one field per column",
+                                field.name(),
+                                b.name
+                            ),
+                        ));
+                    }
+                    carried.push((column, field.name()));
+                }
+            }
+            if let Some(missing) = b
+                .material
+                .point_fields()
+                .iter()
+                .find(|c| !carried.iter().any(|(n, _)| n == *c))
+            {
+                return Err(near(
+                    text,
+                    origin,
+                    &format!("\"{}\"", b.name),
+                    format!(
+                        "body \"{}\": its material {} reads the field column \"{missing}\", which no field of the body carries (list one under fields)",
+                        b.name,
+                        b.material.name()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Everything that can be wrong with a well-typed scene. `text` (possibly empty) is the
@@ -337,6 +414,7 @@ impl Scene {
                 .check_scene(&view)
                 .or_else(|e| item_err(condition.name(), e))?;
         }
+        self.check_fields(text, origin)?;
         if let Some(cfl) = self.fixed_step_cfl()
             && cfl > 1.0
             && !self.time.allow_unstable
@@ -458,10 +536,7 @@ impl Scene {
                     dmax.y
                 ));
             }
-            let max_dt = match self.time.step {
-                TimeStep::Fixed(dt) => dt,
-                TimeStep::Cfl(c) => c * grid.cell_size / b.material.wave_speed(),
-            };
+            let max_dt = self.largest_step(b);
             if let Err(e) = b.material.check_step(grid.cell_size, max_dt) {
                 return err(e);
             }

@@ -20,6 +20,7 @@ use serde::Deserialize;
 use crate::condition::Condition;
 use crate::contact::{Contact, NoSlip};
 use crate::error::SceneError;
+use crate::field::Field;
 use crate::integration::ShapeFunctions;
 use crate::obstacle::ObstacleSpec;
 use crate::output::Output;
@@ -95,6 +96,11 @@ pub struct Scene {
     /// `Driven(body: "intruder", velocity: (0.0, -0.5))`); none by default.
     #[serde(default)]
     pub conditions: Vec<Named<dyn Condition>>,
+    /// Fields the bodies carry beyond those their materials bring (plugin items such as a
+    /// diffused tracer, `Tracer(body: "layer", diffusivity: 1e-4, marked: ..)`; module
+    /// `field`); none by default.
+    #[serde(default)]
+    pub fields: Vec<Named<dyn Field>>,
     /// The plugins the scene was parsed against: their item catalogues, and the systems and
     /// resources they add to every simulation built from it. Not part of the file.
     #[serde(skip)]

@@ -26,7 +26,10 @@ pub enum StepSet {
     GridToParticle,
     /// Point positions, volumes and densities: the move.
     Move,
-    /// Stress update, one system per material type (after the fields a material reads).
+    /// The fields the points carry (`crate::field`: the nonlocal fluidity, a plugin's
+    /// tracer), advanced on the grid, one system per kind of field.
+    Fields,
+    /// Stress update, one system per material type (reading the fields it needs).
     ConstitutiveUpdate,
     /// The clock advances by the step just taken.
     Clock,
@@ -38,7 +41,7 @@ pub enum StepSet {
 
 impl StepSet {
     /// How many sets a step has.
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = 11;
 
     /// Every set, in the order a step runs them.
     pub const ALL: [StepSet; StepSet::COUNT] = [
@@ -48,6 +51,7 @@ impl StepSet {
         StepSet::Contact,
         StepSet::GridToParticle,
         StepSet::Move,
+        StepSet::Fields,
         StepSet::ConstitutiveUpdate,
         StepSet::Clock,
         StepSet::Diagnostics,
@@ -62,6 +66,7 @@ impl StepSet {
             StepSet::Contact => "contact",
             StepSet::GridToParticle => "grid_to_particle",
             StepSet::Move => "move",
+            StepSet::Fields => "fields",
             StepSet::ConstitutiveUpdate => "constitutive_update",
             StepSet::Clock => "clock",
             StepSet::Diagnostics => "diagnostics",

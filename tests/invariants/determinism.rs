@@ -237,8 +237,8 @@ fn every_shipped_scene_gives_the_same_state_on_one_and_two_threads() {
 /// fluidity after 60 steps on 1, 2, 3 and 4 threads (issue 49).
 #[test]
 fn a_nonlocal_body_gives_the_same_state_on_one_to_four_threads() {
-    use regolith::material::MaterialState;
-    use regolith::material::nonlocal::Nonlocal;
+    use regolith::grid_field::FieldColumns;
+    use regolith::material::nonlocal::FLUIDITY;
     let path = crate::common::scene_path("chute_flow");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains("material: MuI("));
@@ -253,10 +253,10 @@ fn a_nonlocal_body_gives_the_same_state_on_one_to_four_threads() {
             }
             let names: Vec<String> = sim.bodies().into_iter().map(|b| b.0.name).collect();
             let hashes: Vec<String> = names.iter().map(|n| sim.state_hash(n).unwrap()).collect();
-            let mut q = sim.world.query::<&MaterialState<Nonlocal>>();
+            let mut q = sim.world.query::<&FieldColumns>();
             let fluidity: Vec<u64> = q
                 .iter(&sim.world)
-                .flat_map(|s| s.history.iter().map(|h| h.fluidity.to_bits()))
+                .flat_map(|c| c.get(FLUIDITY).unwrap().iter().map(|g| g.to_bits()))
                 .collect();
             assert!(
                 fluidity.iter().any(|&g| f64::from_bits(g) > 0.0),

@@ -37,9 +37,9 @@ fn a_pressure_front_resumed_twice_is_the_uninterrupted_front() {
 }
 
 /// A nonlocal-fluidity run (the chute with `Nonlocal` for `MuI`) resumed twice is bitwise the
-/// run never interrupted, on one thread and on two: the fluidity is carried in the points'
-/// material history, which the checkpoint saves, and the nodal field is rebuilt from it every
-/// step (issue 49).
+/// run never interrupted, on one thread and on two: the fluidity is carried in the body's
+/// field columns (`fluidity`, `fluidity_seeded`), which the checkpoint saves by name, and the
+/// nodal field is rebuilt from them every step (issues 49 and 50).
 #[test]
 fn a_nonlocal_fluidity_run_resumed_twice_is_the_uninterrupted_run() {
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");

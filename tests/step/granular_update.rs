@@ -47,12 +47,7 @@ fn stress_from(p: f64, ratio: f64, dir: [f64; 3]) -> Stress {
 }
 
 fn step(l: DMat2, dt: f64, density: f64) -> PointStep<'static> {
-    PointStep {
-        velocity_gradient: l,
-        dt,
-        density,
-        fields: &[],
-    }
+    PointStep::new(l, dt, density)
 }
 
 fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {

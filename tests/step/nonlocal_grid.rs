@@ -5,8 +5,8 @@
 
 use glam::DVec2;
 use regolith::body::Points;
-use regolith::grid_field::PointFields;
-use regolith::material::nonlocal::{FluidityHistory, Nonlocal};
+use regolith::grid_field::FieldColumns;
+use regolith::material::nonlocal::{FLUIDITY, INTERPOLATED, Nonlocal, SEEDED};
 use regolith::material::{MaterialSpec, MaterialState};
 use regolith::stress::Stress;
 use regolith::{Regolith, Scene, Simulation};
@@ -41,31 +41,29 @@ fn load(
 ) {
     let mut q = sim
         .world
-        .query::<(&mut Points, &mut MaterialState<Nonlocal>)>();
-    let (mut points, mut state) = q.single_mut(&mut sim.world).unwrap();
+        .query::<(&mut Points, &MaterialState<Nonlocal>, &mut FieldColumns)>();
+    let (mut points, state, mut columns) = q.single_mut(&mut sim.world).unwrap();
     let material = state.params.clone();
+    let [g, seeded] = columns.many_mut([FLUIDITY, SEEDED]).unwrap();
     for k in 0..points.position.len() {
         points.stress[k] = stress;
         points.velocity[k] = velocity(points.position[k]);
         points.volume[k] = MaterialSpec::initial_volume(&material, points.mass[k], &stress);
-        state.history[k] = FluidityHistory {
-            fluidity: fluidity(points.position[k]),
-            seeded: true,
-        };
+        g[k] = fluidity(points.position[k]);
+        seeded[k] = 1.0;
     }
 }
 
 /// Each point's stress, the fluidity its return used (`g_hat`) and its own fluidity.
 fn state(sim: &mut Simulation) -> Vec<(Stress, f64, f64)> {
-    let mut q = sim
-        .world
-        .query::<(&Points, &PointFields, &MaterialState<Nonlocal>)>();
-    let (points, fields, material) = q.single(&sim.world).unwrap();
+    let mut q = sim.world.query::<(&Points, &FieldColumns)>();
+    let (points, columns) = q.single(&sim.world).unwrap();
+    let (g_hat, g) = (
+        columns.get(INTERPOLATED).unwrap(),
+        columns.get(FLUIDITY).unwrap(),
+    );
     (0..points.stress.len())
-        .map(|k| {
-            let g = material.history[k].fluidity;
-            (points.stress[k], fields.row(k)[0], g)
-        })
+        .map(|k| (points.stress[k], g_hat[k], g[k]))
         .collect()
 }
 
@@ -181,19 +179,20 @@ fn a_fluidity_mode_without_source_diffuses_at_the_equations_rate() {
         |x| amplitude * (1.0 + 0.5 * (k * x.x).cos()),
     );
     {
-        let mut q = sim.world.query::<&mut MaterialState<Nonlocal>>();
-        for mut state in q.iter_mut(&mut sim.world) {
-            state.history.iter_mut().for_each(|h| h.seeded = false);
+        let mut q = sim.world.query::<&mut FieldColumns>();
+        for mut columns in q.iter_mut(&mut sim.world) {
+            columns.get_mut(SEEDED).unwrap().fill(0.0);
         }
     }
     // The mode's amplitude in g_hat, projected on cos(k x) over the points.
     let mode = |sim: &mut Simulation| {
-        let mut q = sim.world.query::<(&Points, &PointFields)>();
-        let (points, fields) = q.single(&sim.world).unwrap();
+        let mut q = sim.world.query::<(&Points, &FieldColumns)>();
+        let (points, columns) = q.single(&sim.world).unwrap();
+        let g_hat = columns.get(INTERPOLATED).unwrap();
         let (mut dot, mut norm) = (0.0, 0.0);
         for (i, x) in points.position.iter().enumerate() {
             let c = (k * x.x).cos();
-            dot += fields.row(i)[0] * c;
+            dot += g_hat[i] * c;
             norm += c * c;
         }
         dot / norm

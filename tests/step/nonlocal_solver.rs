@@ -6,9 +6,9 @@
 
 use glam::{DMat2, DVec2};
 use regolith::grid::GridGeometry;
-use regolith::grid_field::{FieldWalls, NodalScalar, NodeCondition, laplacian};
+use regolith::grid_field::{FieldValues, FieldWalls, NodalScalar, NodeCondition, laplacian};
 use regolith::material::PointStep;
-use regolith::material::nonlocal::{FluidityHistory, Nonlocal};
+use regolith::material::nonlocal::{INTERPOLATED, Nonlocal};
 use regolith::stress::Stress;
 
 /// The paper's PS-1 material (section 4.1) with the default fluidity parameters, as a scene
@@ -225,19 +225,15 @@ fn the_return_gives_a_plastic_rate_of_g_mu() {
             xy: shear * p,
         };
         let mut s = stress;
-        let mut history = FluidityHistory {
-            fluidity: g_n,
-            seeded: true,
-        };
         let (tau_tr, p) = (stress.equivalent_shear(), stress.pressure());
         let g = m.advance_node(g_n, 0.0, tau_tr, p, dt);
+        let g_hat = [g];
+        let columns = [(INTERPOLATED, &g_hat[..])];
         let step = PointStep {
-            velocity_gradient: DMat2::ZERO,
-            dt,
-            density: m.base.critical_density * 1.001,
-            fields: &[g],
+            fields: FieldValues::new(&columns, 0),
+            ..PointStep::new(DMat2::ZERO, dt, m.base.critical_density * 1.001)
         };
-        let out = m.update_point(&mut s, &mut history, &step);
+        let out = m.update_point(&mut s, &step);
         let tau = s.equivalent_shear();
         let gdp = out.plastic_strain_rate;
         assert!(

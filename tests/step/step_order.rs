@@ -1,12 +1,19 @@
 //! The step's order is the table at the top of `src/schedule.rs`: for every combination of
 //! the options that choose core systems (shape functions, stress update, dilatation,
-//! transfer, spacing, contact, materials) the step is built, and the systems it runs, set by
-//! set, are held against the table read from that file.
+//! transfer, spacing, contact, materials, a listed field) the step is built, and the systems
+//! it runs, set by set, are held against the table read from that file. ARCHITECTURE.md
+//! names the same sets in the same order.
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleConfigs;
+use bevy_ecs::system::ScheduleSystem;
+use bevy_ecs::world::EntityWorldMut;
 use regolith::contact::{Contact, Frictional, NoSlip};
+use regolith::field::Field;
+use regolith::grid_field::FieldColumns;
 use regolith::integration::ShapeFunctions;
 use regolith::material::MaterialSpec;
+use regolith::registry::Item;
 use regolith::resources::{Dilatation, StressUpdate};
 use regolith::schedule::{StepOptions, build_schedule};
 use regolith::shape_functions::{CpdiFixed, Linear, QuadraticBspline};
@@ -14,6 +21,29 @@ use regolith::step::StepSet;
 use regolith::step::spacing::{DeltaCorrection, Spacing};
 
 const TABLE_SOURCE: &str = include_str!("../../src/schedule.rs");
+const ARCHITECTURE: &str = include_str!("../../ARCHITECTURE.md");
+
+/// A field a scene could list, as a plugin's would be: its system writes field columns, as
+/// the fluidity's does, so the two must be declared free of each other's order.
+#[derive(Clone, Debug, serde::Deserialize)]
+struct Dye;
+
+impl Item for Dye {
+    const NAME: &'static str = "Dye";
+    const UNIT: bool = true;
+}
+
+fn spread_dye(_: Query<&mut FieldColumns>) {}
+
+impl Field for Dye {
+    fn columns(&self) -> &'static [&'static str] {
+        &["dye"]
+    }
+    fn attach(&self, _: &mut EntityWorldMut) {}
+    fn system(&self) -> ScheduleConfigs<ScheduleSystem> {
+        spread_dye.into_configs()
+    }
+}
 
 /// One entry of the table: a system and the conditions under which the step has it.
 struct Entry {
@@ -92,6 +122,8 @@ struct Case<'a> {
     /// The conditions that hold, as the table writes them.
     holds: Vec<String>,
     scheme: &'static str,
+    /// The systems of the fields the scene lists (`<F>`).
+    listed: Vec<String>,
 }
 
 /// The systems each set runs, in order (the timing laps separate the sets).
@@ -123,7 +155,9 @@ fn expected(table: &[Entry], case: &Case, materials: &[&str]) -> Vec<Vec<String>
                 if !entry.when.iter().all(|w| case.holds.contains(w)) {
                     continue;
                 }
-                if entry.system.ends_with("<M>") {
+                if entry.system == "<F>" {
+                    systems.extend(case.listed.iter().cloned());
+                } else if entry.system.ends_with("<M>") {
                     let base = entry.system.trim_end_matches("<M>");
                     systems.extend(materials.iter().map(|m| format!("{base}<{m}>")));
                 } else {
@@ -135,16 +169,11 @@ fn expected(table: &[Entry], case: &Case, materials: &[&str]) -> Vec<Vec<String>
         .collect()
 }
 
-/// Material updates run in no fixed order among themselves: they are compared sorted, in
-/// the places they take.
-fn sort_updates(systems: &mut [String]) {
-    let at: Vec<usize> = (0..systems.len())
-        .filter(|&k| systems[k].starts_with("update_stress<"))
-        .collect();
-    let mut names: Vec<String> = at.iter().map(|&k| systems[k].clone()).collect();
-    names.sort();
-    for (k, name) in at.into_iter().zip(names) {
-        systems[k] = name;
+/// Material updates, and fields, run in no fixed order among themselves: their sets are
+/// compared sorted.
+fn sort_unordered(sets: &mut [Vec<String>]) {
+    for set in [StepSet::Fields, StepSet::ConstitutiveUpdate] {
+        sets[set as usize].sort();
     }
 }
 
@@ -198,6 +227,8 @@ fn the_step_runs_the_table_for_every_combination_of_options() {
         vec![(&*elastic, "LinearElastic"), (&*mui, "MuI")],
         vec![(&*elastic, "LinearElastic"), (&*nonlocal, "Nonlocal")],
     ];
+    // With and without a field the scene lists.
+    let listed_sets: [Vec<Box<dyn Field>>; 2] = [Vec::new(), vec![Box::new(Dye)]];
     let mut cases = 0;
     for (integration, scheme) in schemes {
         for update in [StressUpdate::Usl, StressUpdate::Musl] {
@@ -208,7 +239,10 @@ fn the_step_runs_the_table_for_every_combination_of_options() {
                         Spacing::DeltaCorrection(DeltaCorrection::default()),
                     ] {
                         for (contact, contact_name) in contacts {
-                            for materials in &material_sets {
+                            for (materials, listed) in material_sets
+                                .iter()
+                                .flat_map(|m| listed_sets.iter().map(move |l| (m, l)))
+                            {
                                 let mut holds = vec![
                                     format!("{update:?}"),
                                     format!("{dilatation:?}"),
@@ -219,6 +253,16 @@ fn the_step_runs_the_table_for_every_combination_of_options() {
                                     holds.push("DeltaCorrection".into());
                                 }
                                 holds.extend(materials.iter().map(|(_, n)| n.to_string()));
+                                let materials_of: Vec<&dyn MaterialSpec> =
+                                    materials.iter().map(|(m, _)| *m).collect();
+                                let fields: Vec<Box<dyn Field>> = materials_of
+                                    .iter()
+                                    .flat_map(|m| m.fields())
+                                    .chain(listed.iter().cloned())
+                                    .collect();
+                                if !fields.is_empty() {
+                                    holds.push("Fields".into());
+                                }
                                 let case = Case {
                                     options: StepOptions {
                                         integration,
@@ -227,17 +271,18 @@ fn the_step_runs_the_table_for_every_combination_of_options() {
                                         affine,
                                         spacing,
                                         contact,
-                                        materials: materials.iter().map(|(m, _)| *m).collect(),
+                                        materials: materials_of,
+                                        fields,
                                     },
                                     holds,
                                     scheme,
+                                    listed: listed.iter().map(|_| "spread_dye".into()).collect(),
                                 };
                                 let names: Vec<&str> = materials.iter().map(|(_, n)| *n).collect();
                                 let mut ran = executed(&case.options);
                                 let mut want = expected(&table, &case, &names);
-                                let update = StepSet::ConstitutiveUpdate as usize;
-                                sort_updates(&mut ran[update]);
-                                sort_updates(&mut want[update]);
+                                sort_unordered(&mut ran);
+                                sort_unordered(&mut want);
                                 assert_eq!(ran, want, "options {:?}", case.holds);
                                 cases += 1;
                             }
@@ -247,7 +292,7 @@ fn the_step_runs_the_table_for_every_combination_of_options() {
             }
         }
     }
-    assert_eq!(cases, 3 * 2 * 2 * 2 * 2 * 3 * 4);
+    assert_eq!(cases, 3 * 2 * 2 * 2 * 2 * 3 * 4 * 2);
 }
 
 #[test]
@@ -257,4 +302,16 @@ fn the_table_names_every_set_in_order() {
     sets.dedup();
     let all: Vec<String> = StepSet::ALL.iter().map(|s| format!("{s:?}")).collect();
     assert_eq!(sets, all);
+}
+
+/// ARCHITECTURE.md's "One step" lists the sets on one line, as the code runs them.
+#[test]
+fn the_architecture_names_the_same_sets() {
+    let all: Vec<String> = StepSet::ALL.iter().map(|s| format!("{s:?}")).collect();
+    let line = ARCHITECTURE
+        .lines()
+        .find(|l| l.starts_with("Prepare "))
+        .expect("ARCHITECTURE.md has a line of the step's sets, starting with Prepare");
+    let listed: Vec<String> = line.split_whitespace().map(String::from).collect();
+    assert_eq!(listed, all, "ARCHITECTURE.md's sets against StepSet::ALL");
 }

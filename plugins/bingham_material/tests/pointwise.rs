@@ -57,7 +57,7 @@ proptest! {
         let trial = start.jaumann_elastic_trial(l, dt, shear, bulk);
         let tau_trial = trial.equivalent_shear();
         let mut s = start;
-        let step = PointStep { velocity_gradient: l, dt, density: m.density, fields: &[] };
+        let step = PointStep::new(l, dt, m.density);
         let out = m.update(&mut s, &mut (), &step);
         let tau = s.equivalent_shear();
         let scale = 1.0 + tau_trial + yield_stress;
@@ -99,7 +99,7 @@ proptest! {
         let (shear, bulk) = moduli(m.youngs_modulus, m.poisson_ratio);
         let tau_trial = start.jaumann_elastic_trial(l, dt, shear, bulk).equivalent_shear();
         let mut s = start;
-        let step = PointStep { velocity_gradient: l, dt, density: m.density, fields: &[] };
+        let step = PointStep::new(l, dt, m.density);
         m.update(&mut s, &mut (), &step);
         let bound = yield_stress
             + eta * tau_trial / (shear * dt)

@@ -17,6 +17,7 @@ use super::{Output, OutputFaults, RunDir, Timing, write_or_fault};
 use crate::body::{Body, PointStates, Points};
 use crate::carry::{Carried, carried, restored};
 use crate::grid::{GridField, GridGeometry};
+use crate::grid_field::FieldColumns;
 use crate::plugin::Install;
 use crate::registry::Item;
 use crate::resources::Clock;
@@ -117,7 +118,8 @@ pub struct Vtk {
     /// Or the times to write them at (s), increasing.
     #[serde(default)]
     pub at: Option<Vec<f64>>,
-    /// The point fields to write (default: all of them).
+    /// The point fields to write (default: all of them). The columns of the body's fields
+    /// (module `field`: `fluidity`, a plugin's `tracer`) are written after them, always.
     #[serde(default)]
     pub fields: Option<Vec<VtkField>>,
     /// Also write each body's nodal field (`.vti`).
@@ -218,7 +220,13 @@ fn write_frame(
     geometry: Res<GridGeometry>,
     mut state: ResMut<VtkState>,
     faults: Res<OutputFaults>,
-    bodies: Query<(&Body, &Points, &PointStates, &GridField)>,
+    bodies: Query<(
+        &Body,
+        &Points,
+        &PointStates,
+        &GridField,
+        Option<&FieldColumns>,
+    )>,
 ) {
     if !state.when.due(&clock) {
         return;
@@ -240,8 +248,14 @@ fn write_frame(
         spacing: geometry.cell_size,
         nodes: [geometry.nodes_along(0), geometry.nodes_along(1)],
     };
-    for ((body, p, st, field), stem) in sorted.into_iter().zip(&stems) {
-        let arrays: Vec<_> = state.fields.iter().map(|f| f.array(body, p, st)).collect();
+    for ((body, p, st, field, columns), stem) in sorted.into_iter().zip(&stems) {
+        let mut arrays: Vec<_> = state.fields.iter().map(|f| f.array(body, p, st)).collect();
+        let columns = columns.map_or(&[][..], |c| c.columns());
+        arrays.extend(
+            columns
+                .iter()
+                .map(|c| xml::Array::f64(&c.name, 1, c.values.iter().copied())),
+        );
         let file = format!("{stem}_{frame:05}.vtu");
         let bytes = xml::unstructured_points(clock.time, &p.position, &arrays);
         write_or_fault(&folder.join(&file), &bytes, &clock, &faults);
