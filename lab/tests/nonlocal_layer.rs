@@ -11,7 +11,9 @@
 //! granular fluidity").
 
 use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
-use regolith_lab::verify::nonlocal::{LayerState, ps1_nonlocal, ps1_nonlocal_ron, run_layer};
+use regolith_lab::verify::nonlocal::{
+    LayerState, NonlocalLayer, nodal_mean_speed, ps1_nonlocal, ps1_nonlocal_ron, run_layer,
+};
 
 const ANGLE: f64 = 25.0;
 const CELLS: f64 = 6.0;
@@ -97,4 +99,66 @@ fn above_the_stopping_height_a_layer_flows_at_one_point_per_cell() {
 #[test]
 fn above_the_stopping_height_a_layer_flows_at_two_by_two_points_per_cell() {
     flows(2);
+}
+
+/// Thickness dependence, the nonlocal model's signature (issue 50): layers of 2 and 4
+/// `H_stop` at 25 degrees on cells of one size (`A d / 1.1`, 6 and 12 cells deep, 1 x 1
+/// points per cell), each run from rest to steady (2 and 5 s). A local law (`MuI`, Bagnold) makes the
+/// mean speed grow as `H^(3/2)`, a ratio of 2.83 for twice the depth; NGF slows the thinner
+/// layer more, and the MPM ratio must be the 1D model's on the same nodes
+/// (`nodal_mean_speed`), within 0.5%, and above the local one.
+#[test]
+fn a_layer_twice_as_deep_runs_faster_than_bagnold_says_as_the_1d_model_does() {
+    let material = ps1_nonlocal(DEFAULT_AMPLITUDE);
+    let th = ANGLE.to_radians();
+    let stop = material.stopping_height(th);
+    let steady = |fraction: f64, cells: f64, end: f64| {
+        let mut states = Vec::new();
+        run_layer(
+            &ps1_nonlocal_ron(""),
+            ANGLE,
+            fraction * stop,
+            cells,
+            end,
+            0.01,
+            &["bodies.layer.points_per_cell=1".to_string()],
+            |s| states.push(*s),
+        )
+        .unwrap();
+        let (before, end) = (&states[states.len() - 21], states.last().unwrap());
+        let change = end.mean_speed / before.mean_speed - 1.0;
+        assert!(
+            change.abs() < 1e-3,
+            "{fraction} H_stop: mean speed still changing by {change:.2e} over 0.2 s"
+        );
+        let nodal = nodal_mean_speed(&material, th, fraction * stop, 9.81, cells as usize, 1)
+            .expect("a flowing nodal layer");
+        (end.mean_speed, nodal)
+    };
+    // The two layers side by side, each on one thread of its own (`run_layer`).
+    let ((thin, thin_1d), (thick, thick_1d)) = std::thread::scope(|scope| {
+        let thin = scope.spawn(|| steady(2.0, 6.0, 2.0));
+        let thick = steady(4.0, 12.0, 5.0);
+        (thin.join().unwrap(), thick)
+    });
+    let (ratio, ratio_1d, local) = (thick / thin, thick_1d / thin_1d, 2f64.powf(1.5));
+    let converged = |fraction: f64| {
+        NonlocalLayer::solve(&material, th, fraction * stop, 9.81, 1600)
+            .unwrap()
+            .mean_speed()
+    };
+    eprintln!(
+        "mean speeds {thin:.4e} and {thick:.4e} m/s (1D on the nodes {thin_1d:.4e} and \
+         {thick_1d:.4e}): ratio {ratio:.4} against the 1D model's {ratio_1d:.4} on the nodes, \
+         {:.4} converged, and the local {local:.4}",
+        converged(4.0) / converged(2.0)
+    );
+    assert!(
+        (ratio / ratio_1d - 1.0).abs() < 5e-3,
+        "ratio {ratio:.4} against the 1D model's {ratio_1d:.4}"
+    );
+    assert!(
+        ratio > 1.1 * local,
+        "ratio {ratio:.4}: not distinct from the local {local:.4}"
+    );
 }
