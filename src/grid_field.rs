@@ -70,6 +70,12 @@ pub struct GridFields {
 }
 
 impl GridFields {
+    /// Bytes of the nodal scalars held now (none before the first step).
+    pub fn bytes(&self) -> usize {
+        let scalar = |s: &NodalScalar| (s.weight.capacity() + s.value.capacity()) * 8;
+        self.fields.iter().map(|(_, s)| scalar(s)).sum()
+    }
+
     /// The field called `name`, created empty the first time.
     pub fn field_mut(&mut self, name: &'static str) -> &mut NodalScalar {
         let k = match self.fields.iter().position(|(n, _)| *n == name) {
@@ -151,6 +157,14 @@ impl FieldColumns {
             .get_disjoint_mut(at)
             .map_err(|_| format!("a column is asked for twice among {names:?}"))?;
         Ok(columns.map(|c| c.values.as_mut_slice()))
+    }
+
+    /// Bytes of the columns' values (for memory estimates).
+    pub fn bytes(&self) -> usize {
+        self.columns
+            .iter()
+            .map(|c| c.values.len() * std::mem::size_of::<f64>())
+            .sum()
     }
 
     /// Every column, in the order the fields added them.

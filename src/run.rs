@@ -308,8 +308,9 @@ pub fn summarize(
 }
 
 /// The memory a scene's state takes: what every point carries (its columns, material
-/// history, phase and rates, footprint, cell and band) and what the grid holds (one nodal
-/// field per body, the cell sums). Point columns that are empty for a body (the affine
+/// history, phase and rates, footprint, cell and band, and its fields' columns with the
+/// bands kept for them) and what the grid holds (one nodal field per body, the cell sums,
+/// the fields' nodal scalars once a step has made them). Point columns that are empty for a body (the affine
 /// field of a FLIP scene, history of a history-free material) are not counted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MemoryEstimate {
@@ -386,6 +387,17 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
         estimate.point_bytes +=
             n * (bytes_per_point(&*spec.material, scene.transfer.affine()) + spacing_point);
         estimate.grid_bytes += nodes * GridField::bytes_per_node(normals) + averaging;
+    }
+    // The fields: their columns, a slot per point in the bands kept for their scatters, and
+    // their nodal scalars.
+    let mut fields = sim.world.query::<(
+        &crate::grid_field::FieldColumns,
+        &crate::grid_field::GridFields,
+        &crate::body::Points,
+    )>();
+    for (columns, nodal, points) in fields.iter(&sim.world) {
+        estimate.point_bytes += columns.bytes() + points.len() * std::mem::size_of::<u32>();
+        estimate.grid_bytes += nodal.bytes();
     }
     estimate
 }

@@ -297,6 +297,14 @@ pub struct LayerState {
     pub flowing: f64,
     /// Fraction of points disconnected.
     pub disconnected: f64,
+    /// With a start profile (`run_layer_from`): the mean speed of the dense points of the top
+    /// lattice row over the profile's mean speed at the same points, minus 1 (the surface
+    /// speed's error, free of the profile's fall over the row's depth and of points thrown
+    /// off the surface).
+    pub surface_error: Option<f64>,
+    /// With a start profile: the rms over the dense points of their speed minus the
+    /// profile's at their height, over the profile's surface speed.
+    pub profile_error: Option<f64>,
 }
 
 /// A layer of the material `material` (a scene item, e.g. [`ps1_nonlocal_ron`]) and depth
@@ -314,6 +322,26 @@ pub fn run_layer(
     end: f64,
     every: f64,
     sets: &[String],
+    each: impl FnMut(&LayerState) + Send,
+) -> Result<(), String> {
+    run_layer_from(
+        material, angle_deg, depth, cells, end, every, sets, None, each,
+    )
+}
+
+/// [`run_layer`], the layer started moving with `profile` (its 1D steady solution, say), so
+/// that a fast layer is steady after a relaxation of the discretisation's difference
+/// instead of seconds of acceleration from rest.
+#[allow(clippy::too_many_arguments)]
+pub fn run_layer_from(
+    material: &str,
+    angle_deg: f64,
+    depth: f64,
+    cells: f64,
+    end: f64,
+    every: f64,
+    sets: &[String],
+    profile: Option<&(dyn Steady + Sync)>,
     mut each: impl FnMut(&LayerState) + Send,
 ) -> Result<(), String> {
     let h = depth / cells;
@@ -343,7 +371,7 @@ pub fn run_layer(
         .num_threads(1)
         .build()
         .map_err(|e| e.to_string())?;
-    pool.install(|| layer_steps(&scene, gravity, depth, every, &mut each))
+    pool.install(|| layer_steps(&scene, gravity, depth, every, profile, &mut each))
 }
 
 fn layer_steps(
@@ -351,19 +379,48 @@ fn layer_steps(
     gravity: DVec2,
     depth: f64,
     every: f64,
+    profile: Option<&(dyn Steady + Sync)>,
     each: &mut (impl FnMut(&LayerState) + Send),
 ) -> Result<(), String> {
     let mut sim = Simulation::new(scene);
     {
         let mut points = sim.points_mut("layer").expect("one body");
-        start_steady(&mut points, &super::chute::ps1(), gravity, depth, None);
+        let profile = profile.map(|p| p as &dyn Steady);
+        start_steady(&mut points, &super::chute::ps1(), gravity, depth, profile);
     }
     let sample = |sim: &mut Simulation| {
+        let spacing = 0.5 * sim.grid().cell_size;
         let mut q = sim.world.query::<(&Points, &PointStates)>();
         let (p, s) = q.single(&sim.world).expect("one body");
         let n = p.len() as f64;
         let mass: f64 = p.mass.iter().sum();
+        let dense: Vec<usize> = (0..p.len())
+            .filter(|&k| s.phase[k] != Phase::Disconnected && p.mass[k] > 0.0)
+            .collect();
+        let against = |profile: &(dyn Steady + Sync)| {
+            let top = dense
+                .iter()
+                .map(|&k| p.position[k].y)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let row: Vec<usize> = dense
+                .iter()
+                .copied()
+                .filter(|&k| p.position[k].y > top - 0.5 * spacing)
+                .collect();
+            let speed = |k: usize| profile.speed(p.position[k].y);
+            let measured: f64 = row.iter().map(|&k| p.velocity[k].x).sum();
+            let expected: f64 = row.iter().map(|&k| speed(k)).sum();
+            let square: f64 = dense
+                .iter()
+                .map(|&k| (p.velocity[k].x - speed(k)).powi(2))
+                .sum();
+            let rms = (square / dense.len() as f64).sqrt() / profile.surface_speed();
+            (measured / expected - 1.0, rms)
+        };
+        let errors = profile.map(against);
         LayerState {
+            surface_error: errors.map(|e| e.0),
+            profile_error: errors.map(|e| e.1),
             time: sim.clock().time,
             mean_speed: p
                 .mass
