@@ -13,9 +13,13 @@
 //! last at the end of the run; every run is at the default numerical settings unless
 //! `--set` says otherwise. `--seed 1e-4,2` adds a normal-velocity disturbance of 1e-4 m/s
 //! and a wavelength of two cells to the start (`verify::chute::Disturbance`), so that a
-//! mode's growth or decay shows in a short run.
+//! mode's growth or decay shows in a short run. `--nonlocal` runs the layer with the
+//! `Nonlocal` PS-1 material (default fluidity parameters) and measures it against the
+//! converged 1D NGF solution (`verify::nonlocal::NonlocalLayer`) instead of Bagnold's.
 
+use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
 use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, Disturbance, Steady, ps1, run};
+use regolith_lab::verify::nonlocal::{NonlocalLayer, ps1_nonlocal, ps1_nonlocal_ron};
 
 fn list(arg: &str) -> Vec<f64> {
     arg.split(',')
@@ -26,7 +30,9 @@ fn list(arg: &str) -> Vec<f64> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.len() < 3 {
-        eprintln!("usage: dense_flow ANGLES CELLS_PER_DEPTH END [EVERY] [--set k=v]...");
+        eprintln!(
+            "usage: dense_flow ANGLES CELLS_PER_DEPTH END [EVERY] [--seed A,CELLS] [--nonlocal] [--set k=v]..."
+        );
         std::process::exit(2);
     }
     let (angles, resolutions, end) = (list(&args[0]), list(&args[1]), list(&args[2])[0]);
@@ -34,11 +40,15 @@ fn main() {
         .get(3)
         .filter(|a| !a.starts_with("--"))
         .map_or(1.0, |a| list(a)[0]);
-    let sets: Vec<String> = args
+    let mut sets: Vec<String> = args
         .windows(2)
         .filter(|w| w[0] == "--set")
         .map(|w| w[1].clone())
         .collect();
+    let nonlocal = args.iter().any(|a| a == "--nonlocal");
+    if nonlocal {
+        sets.insert(0, format!("bodies.layer.material={}", ps1_nonlocal_ron("")));
+    }
     let disturbance = args.windows(2).find(|w| w[0] == "--seed").map(|w| {
         let v = list(&w[1]);
         Disturbance {
@@ -54,8 +64,14 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for &deg in &angles {
         for &per_depth in &resolutions {
-            let profile = Bagnold::new(&material, deg.to_radians(), DEPTH, 9.81);
-            let analytic = profile.as_ref().map_or(f64::NAN, |b| b.mean_speed());
+            let th = deg.to_radians();
+            let profile: Option<Box<dyn Steady>> = if nonlocal {
+                let m = ps1_nonlocal(DEFAULT_AMPLITUDE);
+                NonlocalLayer::solve(&m, th, DEPTH, 9.81, 1600).map(|l| Box::new(l) as _)
+            } else {
+                Bagnold::new(&material, th, DEPTH, 9.81).map(|b| Box::new(b) as _)
+            };
+            let analytic = profile.as_ref().map_or(f64::NAN, |b| mean_speed(&**b));
             let started = std::time::Instant::now();
             let mut last: Option<(f64, f64)> = None;
             let row = |t: f64, m: &ChuteState| {
@@ -87,7 +103,7 @@ fn main() {
                 per_depth as usize,
                 end,
                 &sets,
-                profile.as_ref().map(|b| b as &dyn Steady),
+                profile.as_deref(),
                 disturbance,
                 every,
                 row,
@@ -97,4 +113,14 @@ fn main() {
             }
         }
     }
+}
+
+/// The depth-averaged speed of a steady profile (m/s), by the midpoint rule on 1000 rows.
+fn mean_speed(profile: &dyn Steady) -> f64 {
+    let n = 1000;
+    let h = profile.depth();
+    (0..n)
+        .map(|k| profile.speed((k as f64 + 0.5) * h / n as f64))
+        .sum::<f64>()
+        / n as f64
 }

@@ -14,16 +14,21 @@
 //! convergence of the surface speed between resolutions and, where the finest misses 3%, the
 //! resolution that rate says would reach it.
 //!
+//! It also draws `docs/figures/ngf_profiles_22.5.png` and `ngf_profiles_25.png`: each
+//! layer's speed by height on the finest grid run (the dense points' row means, markers)
+//! over the 1D solution (lines), both in units of the 1D surface speed and the depth.
+//!
 //! ```text
 //! cargo run --release -p regolith-lab --example nonlocal_profiles [MAX_CELLS_PER_DEPTH]
 //! ```
-//! (default 40; 20 halves the cost of the finest runs eightfold).
+//! (default 40; 20 cuts the cost of the finest runs eightfold).
 
 use rayon::prelude::*;
 use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
+use regolith_lab::figures::plot::{Series, curves, register_font};
 use regolith_lab::verify::chute::Steady;
 use regolith_lab::verify::nonlocal::{
-    LayerState, NonlocalLayer, ps1_nonlocal, ps1_nonlocal_ron, run_layer_from,
+    LayerState, NonlocalLayer, RowProfile, ps1_nonlocal, ps1_nonlocal_ron, run_layer_from,
 };
 
 const GRAVITY: f64 = 9.81;
@@ -38,6 +43,7 @@ struct Case {
     cells: usize,
     end: f64,
     states: Vec<LayerState>,
+    rows: RowProfile,
     error: Option<String>,
 }
 
@@ -70,6 +76,7 @@ fn main() {
                     cells,
                     end: (5.0 * relaxation(angle, grains)).max(0.5),
                     states: Vec::new(),
+                    rows: Vec::new(),
                     error: None,
                 });
             }
@@ -95,7 +102,10 @@ fn main() {
             |s| states.push(*s),
         );
         case.states = states;
-        case.error = result.err();
+        match result {
+            Ok(rows) => case.rows = rows,
+            Err(e) => case.error = Some(e),
+        }
         eprintln!(
             "{} degrees, H/d = {}, {} cells: done at {:.0} s",
             case.angle,
@@ -197,9 +207,60 @@ fn main() {
             );
         }
     }
+    draw(&cases, &solve);
     println!(
         "\nWall time {:.0} s on {} threads.",
         started.elapsed().as_secs_f64(),
         rayon::current_num_threads()
     );
+}
+
+/// The figures: per angle, each depth's rows on the finest grid run over its 1D profile.
+fn draw(cases: &[Case], solve: &dyn Fn(f64, f64) -> NonlocalLayer) {
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/figures");
+    if let Err(e) = register_font() {
+        eprintln!("no figures: {e}");
+        return;
+    }
+    for &angle in &ANGLES {
+        let mut series = Vec::new();
+        for &grains in &DEPTHS_IN_GRAINS {
+            let Some(finest) = cases
+                .iter()
+                .filter(|c| c.angle == angle && c.grains == grains && c.error.is_none())
+                .max_by_key(|c| c.cells)
+            else {
+                continue;
+            };
+            let layer = solve(angle, grains);
+            let (depth, surface) = (layer.depth(), layer.surface_speed());
+            series.push(Series {
+                label: format!("H/d = {grains}, 1D"),
+                points: (0..=40)
+                    .map(|k| {
+                        let y = depth * k as f64 / 40.0;
+                        (layer.speed(y) / surface, y / depth)
+                    })
+                    .collect(),
+                hollow: false,
+                band: None,
+            });
+            series.push(Series {
+                label: format!("H/d = {grains}, MPM {} cells", finest.cells),
+                points: finest
+                    .rows
+                    .iter()
+                    .map(|&(y, u)| (u / surface, y / depth))
+                    .collect(),
+                hollow: true,
+                band: None,
+            });
+        }
+        let path = folder.join(format!("ngf_profiles_{angle}.png"));
+        let title = format!("NGF layers at {angle} degrees: speed by height against the 1D model");
+        match curves(&path, &title, "u / u_s (1D)", "y / H", &series) {
+            Ok(()) => eprintln!("wrote {}", path.display()),
+            Err(e) => eprintln!("{}: {e}", path.display()),
+        }
+    }
 }

@@ -324,14 +324,16 @@ pub fn run_layer(
     sets: &[String],
     each: impl FnMut(&LayerState) + Send,
 ) -> Result<(), String> {
-    run_layer_from(
-        material, angle_deg, depth, cells, end, every, sets, None, each,
-    )
+    run_layer_from(material, angle_deg, depth, cells, end, every, sets, None, each).map(|_| ())
 }
+
+/// A layer's speed profile: for each lattice row of its dense points (by height, rows half
+/// a lattice spacing apart or more), the row's mean height and mean down-slope speed.
+pub type RowProfile = Vec<(f64, f64)>;
 
 /// [`run_layer`], the layer started moving with `profile` (its 1D steady solution, say), so
 /// that a fast layer is steady after a relaxation of the discretisation's difference
-/// instead of seconds of acceleration from rest.
+/// instead of seconds of acceleration from rest. Returns the layer's rows at the end.
 #[allow(clippy::too_many_arguments)]
 pub fn run_layer_from(
     material: &str,
@@ -343,7 +345,7 @@ pub fn run_layer_from(
     sets: &[String],
     profile: Option<&(dyn Steady + Sync)>,
     mut each: impl FnMut(&LayerState) + Send,
-) -> Result<(), String> {
+) -> Result<RowProfile, String> {
     let h = depth / cells;
     let rows = 2 * cells.ceil() as usize;
     let th = angle_deg.to_radians();
@@ -381,7 +383,7 @@ fn layer_steps(
     every: f64,
     profile: Option<&(dyn Steady + Sync)>,
     each: &mut (impl FnMut(&LayerState) + Send),
-) -> Result<(), String> {
+) -> Result<RowProfile, String> {
     let mut sim = Simulation::new(scene);
     {
         let mut points = sim.points_mut("layer").expect("one body");
@@ -447,7 +449,28 @@ fn layer_steps(
             each(&sample(&mut sim));
         }
     }
-    Ok(())
+    let spacing = 0.5 * sim.grid().cell_size;
+    let mut q = sim.world.query::<(&Points, &PointStates)>();
+    let (p, s) = q.single(&sim.world).expect("one body");
+    let mut dense: Vec<(f64, f64)> = (0..p.len())
+        .filter(|&k| s.phase[k] != Phase::Disconnected && p.mass[k] > 0.0)
+        .map(|k| (p.position[k].y, p.velocity[k].x))
+        .collect();
+    dense.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut rows: Vec<Vec<(f64, f64)>> = Vec::new();
+    for point in dense {
+        match rows.last_mut() {
+            Some(row) if point.0 - row[0].0 < 0.5 * spacing => row.push(point),
+            _ => rows.push(vec![point]),
+        }
+    }
+    let mean = |row: &[(f64, f64)], f: fn(&(f64, f64)) -> f64| {
+        row.iter().map(f).sum::<f64>() / row.len() as f64
+    };
+    Ok(rows
+        .iter()
+        .map(|row| (mean(row, |p| p.0), mean(row, |p| p.1)))
+        .collect())
 }
 
 #[cfg(test)]
