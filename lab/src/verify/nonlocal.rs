@@ -324,7 +324,10 @@ pub fn run_layer(
     sets: &[String],
     each: impl FnMut(&LayerState) + Send,
 ) -> Result<(), String> {
-    run_layer_from(material, angle_deg, depth, cells, end, every, sets, None, each).map(|_| ())
+    run_layer_from(
+        material, angle_deg, depth, cells, end, every, sets, None, each,
+    )
+    .map(|_| ())
 }
 
 /// A layer's speed profile: for each lattice row of its dense points (by height, rows half
