@@ -57,6 +57,7 @@ fn main() {
         end,
         end / 10.0,
         &sets,
+        None,
         |s| {
             println!(
                 "| {:.3} | {:.3e} | {:.3e} | {:.3} | {:.3} |",

@@ -4,7 +4,7 @@
 //! the converged 1D solution (`verify::nonlocal::NonlocalLayer` on 1600 cells).
 //!
 //! Each layer starts in its lithostatic state moving with the 1D solution
-//! (`run_layer_from`), so what the run measures is the relaxation onto the MPM scheme's own
+//! (`run_layer`), so what the run measures is the relaxation onto the MPM scheme's own
 //! steady state; it runs for five relaxation times `T = 1.5 u_s/(mu g cos theta)` (the time
 //! a Bagnold layer's momentum takes to diffuse across it), at least 0.5 s. Printed for each,
 //! at the end: the surface speed's error (the dense points of the top lattice row against the
@@ -28,7 +28,7 @@ use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
 use regolith_lab::figures::plot::{Series, curves, register_font};
 use regolith_lab::verify::chute::Steady;
 use regolith_lab::verify::nonlocal::{
-    LayerState, NonlocalLayer, RowProfile, ps1_nonlocal, ps1_nonlocal_ron, run_layer_from,
+    LayerState, NonlocalLayer, RowProfile, ps1_nonlocal, ps1_nonlocal_ron, run_layer,
 };
 
 const GRAVITY: f64 = 9.81;
@@ -90,7 +90,7 @@ fn main() {
         let profile = solve(case.angle, case.grains);
         let every = case.end / 40.0;
         let mut states = Vec::new();
-        let result = run_layer_from(
+        let result = run_layer(
             &ps1_nonlocal_ron(""),
             case.angle,
             case.grains * d,

@@ -75,6 +75,7 @@ impl Case {
             self.end,
             self.end / 40.0,
             &sets,
+            None,
             |s| states.push(*s),
         )
         .unwrap_or_else(|e| panic!("{self:?}: {e}"));

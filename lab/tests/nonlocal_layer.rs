@@ -31,6 +31,7 @@ fn layer(fraction: f64, points: usize, end: f64) -> Vec<LayerState> {
         end,
         0.01,
         &[format!("bodies.layer.points_per_cell={points}")],
+        None,
         |s| states.push(*s),
     )
     .unwrap();
@@ -122,6 +123,7 @@ fn a_layer_twice_as_deep_runs_faster_than_bagnold_says_as_the_1d_model_does() {
             end,
             0.01,
             &["bodies.layer.points_per_cell=1".to_string()],
+            None,
             |s| states.push(*s),
         )
         .unwrap();

@@ -297,7 +297,7 @@ pub struct LayerState {
     pub flowing: f64,
     /// Fraction of points disconnected.
     pub disconnected: f64,
-    /// With a start profile (`run_layer_from`): the mean speed of the dense points of the top
+    /// With a start profile (`run_layer`'s `profile`): the mean speed of the dense points of the top
     /// lattice row over the profile's mean speed at the same points, minus 1 (the surface
     /// speed's error, free of the profile's fall over the row's depth and of points thrown
     /// off the surface).
@@ -307,38 +307,21 @@ pub struct LayerState {
     pub profile_error: Option<f64>,
 }
 
+/// A layer's speed profile: for each lattice row of its dense points (by height, rows half
+/// a lattice spacing apart or more), the row's mean height and mean down-slope speed.
+pub type RowProfile = Vec<(f64, f64)>;
+
 /// A layer of the material `material` (a scene item, e.g. [`ps1_nonlocal_ron`]) and depth
 /// `depth` on a rough (no-slip) incline at `angle_deg` degrees, periodic along the slope,
 /// `cells` cells deep (a whole number puts its top on a cell boundary, `n + 0.5` half way up
 /// a cell) and 4 cells long, 2 x 2 points per cell,
 /// started from its lithostatic state at rest under the tilted gravity and run to `end` s;
 /// `each` sees the state every `every` s. `sets` are further scene overrides.
+/// With `profile` (its 1D steady solution, say) the layer starts moving with it, so that a
+/// fast layer is steady after a relaxation of the discretisation's difference instead of
+/// seconds of acceleration from rest. Returns the layer's rows at the end.
 #[allow(clippy::too_many_arguments)]
 pub fn run_layer(
-    material: &str,
-    angle_deg: f64,
-    depth: f64,
-    cells: f64,
-    end: f64,
-    every: f64,
-    sets: &[String],
-    each: impl FnMut(&LayerState) + Send,
-) -> Result<(), String> {
-    run_layer_from(
-        material, angle_deg, depth, cells, end, every, sets, None, each,
-    )
-    .map(|_| ())
-}
-
-/// A layer's speed profile: for each lattice row of its dense points (by height, rows half
-/// a lattice spacing apart or more), the row's mean height and mean down-slope speed.
-pub type RowProfile = Vec<(f64, f64)>;
-
-/// [`run_layer`], the layer started moving with `profile` (its 1D steady solution, say), so
-/// that a fast layer is steady after a relaxation of the discretisation's difference
-/// instead of seconds of acceleration from rest. Returns the layer's rows at the end.
-#[allow(clippy::too_many_arguments)]
-pub fn run_layer_from(
     material: &str,
     angle_deg: f64,
     depth: f64,
