@@ -16,17 +16,17 @@
 //!   writes only its own columns, so fields need no order among themselves; it finds its
 //!   grid operators (scatter, Laplacian, gather over the active nodes) in `grid_field`.
 //!
-//! The scene check asks each field whether the scene suits it ([`Field::check_scene`], at the
-//! field's line) and whether the step does ([`Field::check_step`], for an explicit
-//! operator's stability), refuses two fields carrying one column on a body, and a material
-//! reading a column no field of its body carries.
+//! The scene check asks each field whether the step suits it ([`Field::check_step`], for an
+//! explicit operator's stability, at the field's line), and refuses a listed field whose
+//! body the scene lacks, two fields carrying one column on a body, and a material reading a
+//! column no field of its body carries. (A field sees no more of the scene than that: this
+//! module sits below the scene's view, which holds the materials that bring fields.)
 
 use bevy_ecs::schedule::ScheduleConfigs;
 use bevy_ecs::system::ScheduleSystem;
 use bevy_ecs::world::EntityWorldMut;
 
 use crate::registry::DynItem;
-use crate::scene_view::SceneView;
 
 /// A field: an [`Item`](crate::registry::Item) (its scene name and parameter checks) that
 /// implements this, registered with `app.register::<dyn Field, YourType>()` for scenes to
@@ -39,12 +39,6 @@ pub trait Field: DynItem {
     }
     /// The columns the field adds to a body, by name.
     fn columns(&self) -> &'static [&'static str];
-    /// What must hold between the field and the rest of the scene beyond its body existing
-    /// (checked by the scene); `check` reports a failure at the field's line. By default
-    /// nothing.
-    fn check_scene(&self, _scene: &SceneView) -> Result<(), String> {
-        Ok(())
-    }
     /// Whether steps of at most `max_dt` (s) on cells of `cell_size` (m) suit the field (an
     /// explicit diffusion's stability); by default any do.
     fn check_step(&self, _cell_size: f64, _max_dt: f64) -> Result<(), String> {

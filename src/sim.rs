@@ -8,7 +8,6 @@ use glam::{DMat2, DVec2};
 use crate::body::{Body, BodyState, PointStates, Points};
 use crate::diagnostics::{EnergyLimit, Health, Surveys};
 use crate::error::Fault;
-use crate::field::Field;
 use crate::fill::fill;
 use crate::grid::{GridField, GridGeometry};
 use crate::grid_field::{FieldColumns, GridFields, StartBands};
@@ -193,15 +192,7 @@ impl Simulation {
                 Surveys::default(),
             ));
             spec.material.attach(&mut entity, n);
-            // The fields the body carries: its material's, then those the scene lists for it.
-            let brought = spec.material.fields();
-            let listed = scene.fields.iter().map(|f| &f.0);
-            let listed = listed.filter(|f| f.body() == Some(spec.name.as_str()));
-            let fields: Vec<&dyn Field> = brought
-                .iter()
-                .map(|f| &**f)
-                .chain(listed.map(|f| &**f))
-                .collect();
+            let fields = scene.fields_of(spec);
             if !fields.is_empty() {
                 entity.insert((
                     FieldColumns::default(),

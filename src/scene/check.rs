@@ -150,7 +150,6 @@ impl Scene {
     /// The fields the scene lists, and the columns each body's fields carry against what its
     /// material reads (module `field`).
     fn check_fields(&self, text: &str, origin: &str) -> Result<(), SceneError> {
-        let view = self.view();
         let h = self.grid().cell_size;
         for field in &self.fields {
             let name = field.name();
@@ -168,17 +167,12 @@ impl Scene {
                 ));
             };
             let b = self.body(body).map_err(at)?;
-            field.check_scene(&view).map_err(at)?;
             field.check_step(h, self.largest_step(b)).map_err(at)?;
         }
         for b in &self.bodies {
-            let brought = b.material.fields();
-            let listed = self
-                .fields
-                .iter()
-                .filter(|f| f.body() == Some(b.name.as_str()));
+            let fields = self.fields_of(b);
             let mut carried: Vec<(&str, &str)> = Vec::new();
-            for field in brought.iter().chain(listed.map(|f| &f.0)) {
+            for field in &fields {
                 for column in field.columns() {
                     if let Some((_, first)) = carried.iter().find(|(c, _)| c == column) {
                         return Err(near(

@@ -194,6 +194,16 @@ impl Scene {
         body_named(&self.bodies, name)
     }
 
+    /// The fields body `body` carries, in the order they are attached: those its material
+    /// brings, then those the scene lists for it (module `field`).
+    pub fn fields_of(&self, body: &BodySpec) -> Vec<Box<dyn Field>> {
+        let listed = self.fields.iter().map(|f| &f.0);
+        let listed = listed.filter(|f| f.body() == Some(body.name.as_str()));
+        let mut fields = body.material.fields();
+        fields.extend(listed.cloned());
+        fields
+    }
+
     /// What an item (an output, a condition) is checked against: the bodies and the grid.
     pub fn view(&self) -> SceneView<'_> {
         SceneView::new(&self.bodies, self.grid())
