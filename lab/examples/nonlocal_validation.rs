@@ -21,7 +21,8 @@
 use rayon::prelude::*;
 use regolith::material::nonlocal::{DEFAULT_AMPLITUDE, Nonlocal};
 use regolith_lab::verify::nonlocal::{
-    LayerState, NonlocalLayer, nodal_mean_speed, ps1_nonlocal, ps1_nonlocal_ron, run_layer,
+    LayerState, NonlocalLayer, Outcome, nodal_mean_speed, ps1_nonlocal, ps1_nonlocal_ron,
+    run_layer, whole_cells,
 };
 
 const GRAVITY: f64 = 9.81;
@@ -54,9 +55,11 @@ impl Case {
 
     /// Whole cells of about `A d / per` across the layer (at least two).
     fn cells_for(material: &Nonlocal, angle: f64, fraction: f64, per: f64) -> f64 {
-        let ad = material.amplitude * material.base.grain_diameter;
-        let depth = fraction * material.stopping_height(angle.to_radians());
-        (depth * per / ad).round().max(2.0)
+        whole_cells(
+            material,
+            fraction * material.stopping_height(angle.to_radians()),
+            per,
+        )
     }
 
     fn depth(&self, material: &Nonlocal) -> f64 {
@@ -83,32 +86,9 @@ impl Case {
     }
 }
 
-/// What a run came to: at rest (every point solid, no speed above 1e-6 m/s), flowing at a
-/// steady speed (within 1% over the last tenth of the run), or neither, with the mean speed's
-/// exponential rate over the last quarter.
+/// What a run came to (`Outcome`), as the tables print it.
 fn verdict(states: &[LayerState]) -> String {
-    let n = states.len();
-    let end = &states[n - 1];
-    let tenth = &states[n - 1 - n / 10];
-    let quarter = &states[n - 1 - n / 4];
-    if end.mean_speed.abs() < 1e-6 && end.max_speed < 1e-6 && end.flowing == 0.0 {
-        let peak = states.iter().map(|s| s.max_speed).fold(0.0, f64::max);
-        return format!("at rest (peak speed {peak:.1e} m/s)");
-    }
-    let rate = (end.mean_speed / quarter.mean_speed).ln() / (end.time - quarter.time);
-    if end.mean_speed > 1e-6 && (end.mean_speed / tenth.mean_speed - 1.0).abs() < 0.01 {
-        return format!(
-            "flows, {:.3e} m/s, {:.0}% of points flowing",
-            end.mean_speed,
-            100.0 * end.flowing
-        );
-    }
-    format!(
-        "unsettled: {:.2e} m/s at {} s, rate {rate:+.2} /s, {:.0}% flowing",
-        end.mean_speed,
-        end.time,
-        100.0 * end.flowing
-    )
+    Outcome::of(states).to_string()
 }
 
 fn main() {

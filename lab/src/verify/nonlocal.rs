@@ -307,6 +307,92 @@ pub struct LayerState {
     pub profile_error: Option<f64>,
 }
 
+/// Whole cells of about `A d / per` across a layer `depth` deep (at least two), so that
+/// its top lies on a cell boundary and the cells resolve the nonlocal length `per` times.
+pub fn whole_cells(material: &Nonlocal, depth: f64, per: f64) -> f64 {
+    let ad = material.amplitude * material.base.grain_diameter;
+    (depth * per / ad).round().max(2.0)
+}
+
+/// What a layer run came to, from its samples (`Outcome::of`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outcome {
+    /// Every point solid and no speed above 1e-6 m/s at the end; the largest speed seen.
+    AtRest { peak_speed: f64 },
+    /// A mean speed steady to 1% over the last tenth of the run; the fraction flowing.
+    Flows { mean_speed: f64, flowing: f64 },
+    /// Neither: the mean speed at the end and its exponential rate over the last quarter.
+    Unsettled {
+        mean_speed: f64,
+        time: f64,
+        rate: f64,
+        flowing: f64,
+    },
+}
+
+impl Outcome {
+    /// The outcome of a run sampled as `states` (in time order, at least four samples).
+    pub fn of(states: &[LayerState]) -> Outcome {
+        let n = states.len();
+        let end = &states[n - 1];
+        let tenth = &states[n - 1 - n / 10];
+        let quarter = &states[n - 1 - n / 4];
+        if end.mean_speed.abs() < 1e-6 && end.max_speed < 1e-6 && end.flowing == 0.0 {
+            let peak_speed = states.iter().map(|s| s.max_speed).fold(0.0, f64::max);
+            return Outcome::AtRest { peak_speed };
+        }
+        if end.mean_speed > 1e-6 && (end.mean_speed / tenth.mean_speed - 1.0).abs() < 0.01 {
+            return Outcome::Flows {
+                mean_speed: end.mean_speed,
+                flowing: end.flowing,
+            };
+        }
+        Outcome::Unsettled {
+            mean_speed: end.mean_speed,
+            time: end.time,
+            rate: (end.mean_speed / quarter.mean_speed).ln() / (end.time - quarter.time),
+            flowing: end.flowing,
+        }
+    }
+
+    /// Whether the layer is stopping: at rest, or unsettled with its speed falling.
+    pub fn stops(&self) -> bool {
+        match *self {
+            Outcome::AtRest { .. } => true,
+            Outcome::Flows { .. } => false,
+            Outcome::Unsettled { rate, .. } => rate < 0.0,
+        }
+    }
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Outcome::AtRest { peak_speed } => {
+                write!(f, "at rest (peak speed {peak_speed:.1e} m/s)")
+            }
+            Outcome::Flows {
+                mean_speed,
+                flowing,
+            } => write!(
+                f,
+                "flows, {mean_speed:.3e} m/s, {:.0}% of points flowing",
+                100.0 * flowing
+            ),
+            Outcome::Unsettled {
+                mean_speed,
+                time,
+                rate,
+                flowing,
+            } => write!(
+                f,
+                "unsettled: {mean_speed:.2e} m/s at {time} s, rate {rate:+.2} /s, {:.0}% flowing",
+                100.0 * flowing
+            ),
+        }
+    }
+}
+
 /// A layer's speed profile: for each lattice row of its dense points (by height, rows half
 /// a lattice spacing apart or more), the row's mean height and mean down-slope speed.
 pub type RowProfile = Vec<(f64, f64)>;
@@ -463,6 +549,45 @@ fn layer_steps(
 mod tests {
     use super::*;
     use crate::verify::chute::Bagnold;
+
+    /// A run's outcome reads its samples: a layer whose speed decays exponentially is
+    /// stopping though not yet at rest, one whose speed grows is not, a steady one flows, a
+    /// still one rests.
+    #[test]
+    fn an_outcome_reads_the_last_samples() {
+        let run = |speed: &dyn Fn(f64) -> f64| -> Vec<LayerState> {
+            (0..=40)
+                .map(|k| {
+                    let time = 0.1 * k as f64;
+                    LayerState {
+                        time,
+                        mean_speed: speed(time),
+                        max_speed: 2.0 * speed(time),
+                        flowing: if speed(time) > 0.0 { 1.0 } else { 0.0 },
+                        ..LayerState::default()
+                    }
+                })
+                .collect()
+        };
+        let decaying = Outcome::of(&run(&|t| 1e-3 * (-2.0 * t).exp()));
+        let Outcome::Unsettled { rate, .. } = decaying else {
+            panic!("{decaying}")
+        };
+        assert!((rate + 2.0).abs() < 1e-9, "{rate}");
+        assert!(decaying.stops());
+        let growing = Outcome::of(&run(&|t| 1e-4 * (0.5 * t).exp()));
+        assert!(!growing.stops(), "{growing}");
+        let steady = Outcome::of(&run(&|t| 1e-2 * (1.0 - (-5.0 * t).exp())));
+        assert!(
+            matches!(steady, Outcome::Flows { .. }) && !steady.stops(),
+            "{steady}"
+        );
+        let still = Outcome::of(&run(&|_| 0.0));
+        assert!(
+            matches!(still, Outcome::AtRest { .. }) && still.stops(),
+            "{still}"
+        );
+    }
 
     /// The MPM scheme's discretisation in 1D converges to the finite-volume solution as the
     /// nodes are refined, and has no flowing solution just below `H_stop` (its discrete
