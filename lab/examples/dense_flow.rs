@@ -15,11 +15,15 @@
 //! and a wavelength of two cells to the start (`verify::chute::Disturbance`), so that a
 //! mode's growth or decay shows in a short run. `--nonlocal` runs the layer with the
 //! `Nonlocal` PS-1 material (default fluidity parameters) and measures it against the
-//! converged 1D NGF solution (`verify::nonlocal::NonlocalLayer`) instead of Bagnold's.
+//! converged 1D NGF solution (`verify::nonlocal::NonlocalLayer`) instead of Bagnold's, and
+//! first prints the 1D model's mean speed on the run's own nodes (`nodal_mean_speed`), the
+//! steady state the scheme converges to at that resolution.
 
 use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
 use regolith_lab::verify::chute::{Bagnold, ChuteState, DEPTH, Disturbance, Steady, ps1, run};
-use regolith_lab::verify::nonlocal::{NonlocalLayer, ps1_nonlocal, ps1_nonlocal_ron};
+use regolith_lab::verify::nonlocal::{
+    NonlocalLayer, nodal_mean_speed, ps1_nonlocal, ps1_nonlocal_ron,
+};
 
 fn list(arg: &str) -> Vec<f64> {
     arg.split(',')
@@ -56,8 +60,25 @@ fn main() {
             cells: v[1],
         }
     });
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow_mui.ron");
     let material = ps1();
+    if nonlocal {
+        // The layer's steady state on its own cells: the MPM scheme's discretisation in 1D
+        // (`nodal_mean_speed`), which a steady MPM layer matches where it holds.
+        let m = ps1_nonlocal(DEFAULT_AMPLITUDE);
+        for &deg in &angles {
+            for &per_depth in &resolutions {
+                let th = deg.to_radians();
+                let nodal = nodal_mean_speed(&m, th, DEPTH, 9.81, per_depth as usize, 2);
+                println!(
+                    "{deg} degrees, {per_depth} cells per depth: the 1D model on these nodes has \
+                     a mean speed of {} m/s\n",
+                    nodal.map_or("- (none)".into(), |v| format!("{v:.4}"))
+                );
+            }
+        }
+    }
     println!(
         "| angle | cells/depth | t (s) | top/H | sum V / area | most in a cell | disconnected (bulk) | mean speed (analytic) m/s | profile rms / u_s | 95% speed (m/s) | rms normal speed (m/s) | box mode (m/s) | grid-scale mode (m/s) [cells] | its rate (1/s) | V spread along a row | wall (s) |"
     );

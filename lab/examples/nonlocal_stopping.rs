@@ -11,7 +11,7 @@
 //! cargo run --release -p regolith-lab --example nonlocal_stopping -- [ANGLES] [LOW,HIGH]
 //! cargo run --release -p regolith-lab --example nonlocal_stopping -- 19,20,21,22.5,25,27,29 0.97,1.03
 //! ```
-//! (the second line is the default; about 35 minutes on 2 cores). Prints the table in
+//! (the second line is the default; about 20 minutes on 2 cores). Prints the table in
 //! markdown and draws `docs/figures/ngf_stopping_height.png`: the model's `H_stop / d`
 //! against the angle (line) and the measured bracket (shaded, from the deepest layer that
 //! stopped to the shallowest that flowed).
@@ -20,7 +20,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 use regolith::material::nonlocal::DEFAULT_AMPLITUDE;
-use regolith_lab::figures::plot::{Series, curves, register_font};
+use regolith_lab::figures::plot::{Series, curves_over, register_font};
 use regolith_lab::verify::nonlocal::{
     LayerState, Outcome, ps1_nonlocal, ps1_nonlocal_ron, run_layer, whole_cells,
 };
@@ -139,26 +139,18 @@ fn main() {
             band.push((angle, low * stop / d, high * stop / d));
         }
     }
-    figure(&material, &angles, band);
+    figure(&material, band);
 }
 
-/// The model's curve over the angles run and the measured brackets as a band.
-fn figure(
-    material: &regolith::material::nonlocal::Nonlocal,
-    angles: &[f64],
-    band: Vec<(f64, f64, f64)>,
-) {
+/// The model's curve from 18.5 to 30.5 degrees (it grows without bound towards atan(mu_s) and
+/// falls to zero at atan(mu_2)) and the measured brackets as a band.
+fn figure(material: &regolith::material::nonlocal::Nonlocal, band: Vec<(f64, f64, f64)>) {
     let d = material.base.grain_diameter;
-    let (first, last) = angles
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &a| {
-            (lo.min(a), hi.max(a))
-        });
     let model = Series {
         label: "(pi/2) xi(tan theta), the model".into(),
         points: (0..=24)
             .map(|k| {
-                let a = first + (last - first) * k as f64 / 24.0;
+                let a = 18.5 + 0.5 * k as f64;
                 (a, material.stopping_height(a.to_radians()) / d)
             })
             .collect(),
@@ -166,21 +158,21 @@ fn figure(
         band: None,
     };
     let measured = Series {
-        label: "MPM, bracket mid-point".into(),
+        label: "MPM: stopped at 0.97, flowed at 1.03 H_stop".into(),
         points: band
             .iter()
             .map(|&(a, lo, hi)| (a, 0.5 * (lo + hi)))
             .collect(),
         hollow: true,
-        band: Some(("MPM: stopped below, flowed above".into(), band.clone())),
+        band: Some(("MPM: the bracket".into(), band.clone())),
     };
     let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/figures");
     let path = folder.join("ngf_stopping_height.png");
     let drawn = register_font().and_then(|()| {
-        curves(
+        curves_over(
             &path,
             "NGF stopping height against the slope (PS-1, A = 0.48)",
-            "slope angle (degrees)",
+            ("slope angle (degrees)", Some((18.0, 31.0))),
             "H_stop / d",
             &[model, measured],
         )

@@ -19,9 +19,9 @@ use regolith_lab::verify::chute::{
     Bagnold, ChuteState, DEPTH, Disturbance, Steady, least_acceleration, ps1, run,
 };
 
-/// The shipped chute scene, `scenes/chute_flow.ron`.
+/// The shipped `MuI` chute scene, `scenes/chute_flow_mui.ron`.
 fn chute_scene() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow.ron")
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/chute_flow_mui.ron")
 }
 
 /// The shipped chute scene at `deg` degrees with 10 mm cells (10 per depth) and APIC, run

@@ -239,7 +239,7 @@ fn every_shipped_scene_gives_the_same_state_on_one_and_two_threads() {
 fn a_nonlocal_body_gives_the_same_state_on_one_to_four_threads() {
     use regolith::grid_field::FieldColumns;
     use regolith::material::nonlocal::FLUIDITY;
-    let path = crate::common::scene_path("chute_flow");
+    let path = crate::common::scene_path("chute_flow_mui");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.contains("material: MuI("));
     let text = text.replace("material: MuI(", "material: Nonlocal(");

@@ -43,7 +43,7 @@ fn a_pressure_front_resumed_twice_is_the_uninterrupted_front() {
 #[test]
 fn a_nonlocal_fluidity_run_resumed_twice_is_the_uninterrupted_run() {
     let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let text = std::fs::read_to_string(scenes.join("chute_flow.ron")).unwrap();
+    let text = std::fs::read_to_string(scenes.join("chute_flow_mui.ron")).unwrap();
     assert!(text.contains("material: MuI("));
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("chute_nonlocal.ron");

@@ -124,9 +124,9 @@ fn the_free_surface_starts_flat_opens_under_the_disc_and_follows_the_points() {
 #[test]
 fn a_compacted_layer_is_reported_in_the_summary_and_the_last_line() {
     use regolith::run::{Provenance, summarize};
-    let scene = crate::common::scene("chute_flow", &[]);
+    let scene = crate::common::scene("chute_flow_mui", &[]);
     let from = Provenance {
-        file: "chute_flow.ron",
+        file: "chute_flow_mui.ron",
         text: "",
         overrides: &[],
     };
@@ -210,7 +210,7 @@ fn the_runout_of_a_collapsing_column_starts_at_its_shape_and_spreads() {
 fn the_velocity_profile_reads_a_sheared_layer_row_by_row() {
     use regolith::body::Points;
     use regolith::output::profile::Profile;
-    let scene = crate::common::scene("chute_flow", &[]);
+    let scene = crate::common::scene("chute_flow_mui", &[]);
     let mut sim = Simulation::new(&scene);
     let grid = sim.grid().clone();
     let mut q = sim.world.query::<&mut Points>();

@@ -19,7 +19,7 @@ fn chute(end: f64, extra: &[&str]) -> Scene {
     let end = format!("time.end={end}");
     sets.push(&end);
     sets.extend_from_slice(extra);
-    crate::common::scene("chute_flow", &sets)
+    crate::common::scene("chute_flow_mui", &sets)
 }
 
 /// The points of the 3 x 3 cells around `(0.025, 0.05)` pulled to half their distance from

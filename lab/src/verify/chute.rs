@@ -26,7 +26,7 @@ use regolith::scene::Scene;
 use regolith::sim::Simulation;
 use regolith::stress::Stress;
 
-/// Depth of the layer in `scenes/chute_flow.ron` (m); `run` checks it against the scene.
+/// Depth of the layer in `scenes/chute_flow_mui.ron` (m); `run` checks it against the scene.
 pub const DEPTH: f64 = 0.1;
 
 /// The mu(I) steady state of a layer of depth `depth` at angle `angle` (radians).
@@ -344,7 +344,7 @@ pub fn measure(
     }
 }
 
-/// Runs the chute scene at `path` (`scenes/chute_flow.ron`) at `angle_deg` degrees with
+/// Runs the chute scene at `path` (`scenes/chute_flow_mui.ron`) at `angle_deg` degrees with
 /// `cells_per_depth` cells across the layer (even: the domain is half as wide as the
 /// layer is deep), to `end` seconds, with further `--set` overrides `sets`. The layer starts
 /// in its lithostatic state moving with `profile` (`start_steady`), and is measured against

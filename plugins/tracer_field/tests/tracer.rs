@@ -117,7 +117,8 @@ fn a_dyed_half_diffuses_at_d_k_squared_and_keeps_its_total() {
 /// as it does without one, and the tracer does move.
 #[test]
 fn a_tracer_beside_the_fluidity_leaves_the_flow_bit_for_bit() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/chute_flow.ron");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/chute_flow_mui.ron");
     let text = std::fs::read_to_string(path).unwrap();
     let text = text.replace("material: MuI(", "material: Nonlocal(");
     let with = text.replace(

@@ -155,14 +155,28 @@ where
         .map_err(fail)
 }
 
-/// Curves with markers, one colour per series, a legend.
+/// Curves with markers, one colour per series, a legend; the axes start at zero.
 pub fn curves(path: &Path, title: &str, x: &str, y: &str, series: &[Series]) -> Result<()> {
+    curves_over(path, title, (x, None), y, series)
+}
+
+/// `curves`, with the `x` axis over `range` if given (a variable whose zero is far off, such
+/// as a slope angle), else from zero.
+pub fn curves_over(
+    path: &Path,
+    title: &str,
+    (x, range): (&str, Option<(f64, f64)>),
+    y: &str,
+    series: &[Series],
+) -> Result<()> {
     let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
     root.fill(&WHITE).map_err(fail)?;
-    let xs = bounds(
-        series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
-        true,
-    );
+    let xs = range.unwrap_or_else(|| {
+        bounds(
+            series.iter().flat_map(|s| s.points.iter().map(|p| p.0)),
+            true,
+        )
+    });
     let band_ends = series
         .iter()
         .filter_map(|s| s.band.as_ref())
