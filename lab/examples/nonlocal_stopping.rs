@@ -139,12 +139,17 @@ fn main() {
             band.push((angle, low * stop / d, high * stop / d));
         }
     }
-    figure(&material, band);
+    figure(&material, band, (low, high));
 }
 
 /// The model's curve from 18.5 to 30.5 degrees (it grows without bound towards atan(mu_s) and
-/// falls to zero at atan(mu_2)) and the measured brackets as a band.
-fn figure(material: &regolith::material::nonlocal::Nonlocal, band: Vec<(f64, f64, f64)>) {
+/// falls to zero at atan(mu_2)) and the measured brackets (`low` and `high` times H_stop) as a
+/// band.
+fn figure(
+    material: &regolith::material::nonlocal::Nonlocal,
+    band: Vec<(f64, f64, f64)>,
+    (low, high): (f64, f64),
+) {
     let d = material.base.grain_diameter;
     let model = Series {
         label: "(pi/2) xi(tan theta), the model".into(),
@@ -158,7 +163,7 @@ fn figure(material: &regolith::material::nonlocal::Nonlocal, band: Vec<(f64, f64
         band: None,
     };
     let measured = Series {
-        label: "MPM: stopped at 0.97, flowed at 1.03 H_stop".into(),
+        label: format!("MPM: stopped at {low}, flowed at {high} H_stop"),
         points: band
             .iter()
             .map(|&(a, lo, hi)| (a, 0.5 * (lo + hi)))

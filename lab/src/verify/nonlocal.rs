@@ -200,21 +200,21 @@ fn quadratic(material: &Nonlocal, mu: f64, p: f64) -> f64 {
 }
 
 /// Newton's method for `F(g) = 0` whose Jacobian is symmetric tridiagonal with `c` off the
-/// diagonal: `row(g, k)` is row `k`'s residual and diagonal entry. Continued in pseudo-time
-/// (each step solves `(J - I/tau) dg = F`, `tau` doubling from a hundredth of the
-/// diagonal's time scale until it is 1e9 times that, then Newton's own step), so that a start far from the root (a thick
-/// layer's local fluidity) does not throw it onto the other root, `g = 0`, or into a cycle;
-/// each step is damped so that no unknown goes negative. Converged when a whole Newton step
-/// is below 1e-12 of the largest starting value (at most 200 steps).
+/// diagonal: `row(g, k)` is row `k`'s residual and diagonal entry. Continued in pseudo-time:
+/// each step solves `(J - I/tau) dg = F`, `1/tau` starting at a hundred times the largest
+/// diagonal entry and halving until it is 1e-9 of that, then Newton's own step. So a start
+/// far from the root (a thick layer's local fluidity) is not thrown onto the other root,
+/// `g = 0`, or into a cycle. Each step is damped so that no unknown goes negative. Converged
+/// when a whole Newton step is below 1e-12 of the largest starting value (at most 200 steps).
 fn newton_tridiagonal(c: f64, g: &mut [f64], row: impl Fn(&[f64], usize) -> (f64, f64)) -> bool {
     let scale = g.iter().cloned().fold(0.0, f64::max);
-    let (mut inverse_tau, mut first) = (f64::NAN, f64::NAN);
+    let first = 100.0
+        * (0..g.len())
+            .map(|k| row(g, k).1.abs())
+            .fold(2.0 * c, f64::max);
+    let mut inverse_tau = first;
     for _ in 0..200 {
         let (r, mut diag): (Vec<f64>, Vec<f64>) = (0..g.len()).map(|k| row(g, k)).unzip();
-        if first.is_nan() {
-            first = 100.0 * diag.iter().fold(2.0 * c, |m, d| m.max(d.abs()));
-            inverse_tau = first;
-        }
         diag.iter_mut().for_each(|d| *d -= inverse_tau);
         let step = solve_tridiagonal(c, &diag, &r);
         let mut damping: f64 = 1.0;
