@@ -316,14 +316,39 @@ pub fn scatter(
     field: &mut NodalScalar,
     point: impl Fn(usize) -> Option<(f64, f64)> + Sync,
 ) {
+    scatter_many(grid, location, bands, [field], |k| {
+        point(k).map(|(w, v)| (w, [v]))
+    });
+}
+
+/// [`scatter`] of `N` scalars that share their points' weights, in one pass over the
+/// footprints: `point(p)` gives the weight and the `N` values. Each field gets the weights
+/// and the weighted means it would get from a [`scatter`] of its own, bit for bit (the sums
+/// are formed the same way, in the same order), at the cost of one.
+pub fn scatter_many<const N: usize>(
+    grid: &GridGeometry,
+    location: &Location,
+    bands: &Bands,
+    mut fields: [&mut NodalScalar; N],
+    point: impl Fn(usize) -> Option<(f64, [f64; N])> + Sync,
+) {
     let nodes = grid.node_count();
-    field.reset(nodes);
+    for field in fields.iter_mut() {
+        field.reset(nodes);
+    }
     let footprints = location.footprints();
+    if N == 0 {
+        return;
+    }
     {
-        let weight = Shared::new(&mut field.weight);
-        let sum = Shared::new(&mut field.value);
+        // Each field's weights and sums; the weights are summed on the first field's only.
+        let shared = fields.each_mut().map(|f| {
+            let f = &mut **f;
+            (Shared::new(&mut f.weight), Shared::new(&mut f.value))
+        });
+        let shared = &shared;
         bands.for_each_phase(|b| {
-            let (weight, sum) = (weight, sum);
+            let weight = shared[0].0;
             let window = bands.node_window(grid, b);
             for &p in bands.points(b) {
                 let p = p as usize;
@@ -335,22 +360,28 @@ pub fn scatter(
                      scattered with bands that do not match the footprints"
                 );
                 f.for_each_entry(|n, s, _| {
+                    let sw = s * w;
                     // SAFETY: the footprint lies in the band's window (checked above), inside
-                    // the two slices of `nodes` entries (reset above), and bands of one phase
+                    // the slices of `nodes` entries (reset above), and bands of one phase
                     // have disjoint windows (`BandLayout::check`).
                     unsafe {
-                        weight.add_at(n, s * w);
-                        sum.add_at(n, s * w * v);
+                        weight.add_at(n, sw);
+                        for ((_, sum), v) in shared.iter().zip(v) {
+                            sum.add_at(n, sw * v);
+                        }
                     }
                 });
             }
         });
     }
     let filled = FILLED * grid.cell_size * grid.cell_size;
-    field
+    let [first, rest @ ..] = &mut fields[..] else {
+        unreachable!("N > 0")
+    };
+    first
         .value
         .par_iter_mut()
-        .zip(field.weight.par_iter_mut())
+        .zip(first.weight.par_iter_mut())
         .for_each(|(v, w)| {
             if *w >= filled {
                 *v /= *w;
@@ -358,6 +389,15 @@ pub fn scatter(
                 (*v, *w) = (0.0, 0.0);
             }
         });
+    // The other fields take the first's weights, zero where it found a node inactive.
+    for field in rest {
+        field.weight.copy_from_slice(&first.weight);
+        field
+            .value
+            .par_iter_mut()
+            .zip(field.weight.par_iter())
+            .for_each(|(v, &w)| *v = if w > 0.0 { *v / w } else { 0.0 });
+    }
 }
 
 /// A node a wall fixes, and the next two nodes inward along the wall's normal (if the grid
@@ -531,6 +571,39 @@ pub fn at_cell_centre(
     x: DVec2,
 ) -> Option<f64> {
     let [i, j] = grid.cell_at(x, 1.0 / grid.cell_size);
+    centre_of(grid, field, nodal, i, j)
+}
+
+/// [`at_cell_centre`] for every cell at once, into `out` (indexed as `GridGeometry::cell_of`
+/// numbers cells): a loop over many points then looks its cell up instead of visiting the
+/// corners for each point.
+pub fn cell_centres(
+    grid: &GridGeometry,
+    field: &NodalScalar,
+    nodal: &[f64],
+    out: &mut Vec<Option<f64>>,
+) {
+    let columns = grid.cells[0];
+    out.clear();
+    out.resize(columns * grid.cells[1], None);
+    out.par_chunks_mut(columns)
+        .enumerate()
+        .for_each(|(j, row)| {
+            for (i, centre) in row.iter_mut().enumerate() {
+                *centre = centre_of(grid, field, nodal, i, j);
+            }
+        });
+}
+
+/// The mean of `nodal` over the active corners of cell `(i, j)` (`None` if none is active).
+#[inline]
+fn centre_of(
+    grid: &GridGeometry,
+    field: &NodalScalar,
+    nodal: &[f64],
+    i: usize,
+    j: usize,
+) -> Option<f64> {
     let next = |axis: usize, k: usize| {
         if k + 1 == grid.nodes_along(axis) {
             0
@@ -607,6 +680,77 @@ mod tests {
             field.weight[n] = 0.0;
         }
         assert_eq!(at(&field, 1.2, 2.9), None);
+        // The table of every cell holds what each cell's centre reads, bit for bit.
+        let mut table = Vec::new();
+        cell_centres(&grid, &field, &values, &mut table);
+        assert_eq!(table.len(), 12);
+        for j in 0..3 {
+            for i in 0..4 {
+                let x = DVec2::new(i as f64 + 0.3, j as f64 + 0.6);
+                let (from_table, read) = (table[grid.cell_of(x)], at(&field, x.x, x.y));
+                assert_eq!(
+                    from_table.map(f64::to_bits),
+                    read.map(f64::to_bits),
+                    "{i} {j}"
+                );
+            }
+        }
+        assert_eq!(table[grid.cell_of(DVec2::new(1.2, 2.9))], None);
+    }
+
+    /// Scattering two values together gives each the weights and means, bit for bit, of a
+    /// scatter of its own, for points spread irregularly over a periodic grid (footprints
+    /// wrapping) with some points left out.
+    #[test]
+    fn a_joint_scatter_equals_separate_ones() {
+        use crate::shape_functions::CpdiFixed;
+        use crate::step::locate_points;
+        use bevy_ecs::system::RunSystemOnce;
+
+        let grid = GridGeometry {
+            origin: DVec2::ZERO,
+            cell_size: 0.1,
+            cells: [6, 9],
+            periodic: [true, false],
+        };
+        let mut points = crate::body::Points::default();
+        for k in 0..150 {
+            let r = |m: u64| ((k as u64 * m) % 1009) as f64 / 1009.0;
+            points.position.push(DVec2::new(0.6 * r(389), 0.9 * r(577)));
+            points.half_width.push(0.025);
+            points.volume.push(1e-3 * (1.0 + r(97)));
+        }
+        let mut world = World::new();
+        world.insert_resource(grid.clone());
+        let body = world
+            .spawn((points, Location::default(), Bands::default()))
+            .id();
+        world.run_system_once(locate_points::<CpdiFixed>).unwrap();
+        let entity = world.entity(body);
+        let (points, location, bands) = (
+            entity.get::<crate::body::Points>().unwrap(),
+            entity.get::<Location>().unwrap(),
+            entity.get::<Bands>().unwrap(),
+        );
+        let point = |k: usize| {
+            let x = points.position[k];
+            (k % 7 != 3).then(|| (points.volume[k], [x.x.sin() + 2.0, 3.0 * x.y - x.x]))
+        };
+        let mut apart = [NodalScalar::default(), NodalScalar::default()];
+        for (i, field) in apart.iter_mut().enumerate() {
+            scatter(&grid, location, bands, field, |k| {
+                point(k).map(|(w, v)| (w, v[i]))
+            });
+        }
+        let (mut a, mut b) = (NodalScalar::default(), NodalScalar::default());
+        scatter_many(&grid, location, bands, [&mut a, &mut b], point);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for (joint, alone) in [(&a, &apart[0]), (&b, &apart[1])] {
+            assert!(alone.weight.iter().filter(|&&w| w > 0.0).count() > 40);
+            assert!(alone.weight.contains(&0.0));
+            assert_eq!(bits(&joint.weight), bits(&alone.weight));
+            assert_eq!(bits(&joint.value), bits(&alone.value));
+        }
     }
 
     #[test]

@@ -537,6 +537,8 @@ pub struct FluidityScratch {
     trials: Vec<Trial>,
     next: Vec<f64>,
     increment: Vec<f64>,
+    /// The nodes' fluidity at the centre of each cell (`grid_field::cell_centres`).
+    centres: Vec<Option<f64>>,
 }
 
 /// The fluidity's step on the nodes for every body of this material (module docs, step 1).
@@ -595,24 +597,27 @@ pub fn advance_fluidity(
         let mut ratio = std::mem::take(nodal.field_mut("trial_ratio"));
         let mut laplacian = std::mem::take(&mut nodal.field_mut("fluidity_laplacian").value);
         let bands = &bands.0;
-        grid_field::scatter(&grid, location, bands, &mut fluidity, |k| {
-            dense(k).map(|(v, _, _)| (v, fluidity_now[k]))
-        });
-        grid_field::scatter(&grid, location, bands, &mut pressure, |k| {
-            dense(k).map(|(v, p, _)| (v, p))
-        });
+        grid_field::scatter_many(
+            &grid,
+            location,
+            bands,
+            [&mut fluidity, &mut pressure],
+            |k| dense(k).map(|(v, p, _)| (v, [fluidity_now[k], p])),
+        );
         let fixed = grid_field::laplacian(&grid, &mut fluidity, &walls, &mut laplacian);
         // Each point's ratio if it returned with the fluidity its cell has now: the node's
         // ratio at its own fluidity is their mean (module docs, step 1).
         let gdt = params.base.shear * dt;
+        let inv_h = 1.0 / grid.cell_size;
+        let cell = |x| {
+            let [i, j] = grid.cell_at(x, inv_h);
+            j * grid.cells[0] + i
+        };
+        grid_field::cell_centres(&grid, &fluidity, &fluidity.value, &mut scratch.centres);
+        let centres = &scratch.centres;
         grid_field::scatter(&grid, location, bands, &mut ratio, |k| {
             dense(k).map(|(v, p, tau)| {
-                let g = grid_field::at_cell_centre(
-                    &grid,
-                    &fluidity,
-                    &fluidity.value,
-                    points.position[k],
-                );
+                let g = centres[cell(points.position[k])];
                 (v, tau / (p + gdt * g.unwrap_or(0.0)))
             })
         });
@@ -636,42 +641,36 @@ pub fn advance_fluidity(
                 .zip(fluidity.value.par_iter())
                 .map(|(new, old)| new - old),
         );
-        let (next, increment) = (&scratch.next, &scratch.increment);
+        grid_field::cell_centres(&grid, &fluidity, &scratch.next, &mut scratch.centres);
+        let (next, increment, centres) = (&scratch.next, &scratch.increment, &scratch.centres);
         // The points: the increment on dense ones, the nodes' fluidity on reconnecting ones
         // (over the active nodes of their footprints; a point that reaches none keeps its `g`,
-        // or is seeded if it reconnects).
+        // or is seeded if it reconnects); then the return's fluidity, the nodes' at the
+        // centre of the point's cell (module docs), or the point's own outside the field.
         let each = fluidity_at.par_iter_mut().zip(seeded_at.par_iter_mut());
-        each.enumerate().for_each(|(k, (g, seeded))| {
-            let interpolated =
-                || grid_field::gather_active(location, &fluidity, [next, increment], k);
+        let each = each.zip(interpolated.par_iter_mut());
+        each.enumerate().for_each(|(k, ((g, seeded), g_hat))| {
+            let interpolated = |nodal| grid_field::gather_active(location, &fluidity, [nodal], k);
             FluidityHistory::edit(g, seeded, |history| match trials[k] {
                 Trial::Out => {}
                 // Not clipped at zero: the point's `g` is the nodes' plus what the grid
                 // cannot see, which may be of either sign; only nodal values (and so
                 // `g_hat`) are kept non-negative, by the nodal solve.
                 Trial::Dense { .. } => {
-                    if let Some([_, dg]) = interpolated() {
+                    if let Some([dg]) = interpolated(increment) {
                         history.fluidity += dg;
                     }
                 }
-                Trial::Reconnecting { p, tau } => match interpolated() {
-                    Some([g_hat, _]) => {
+                Trial::Reconnecting { p, tau } => match interpolated(next) {
+                    Some([g_hat]) => {
                         history.fluidity = g_hat;
                         history.seeded = tau > params.base.mu_s * p;
                     }
                     None => params.seed(history, p, tau / p),
                 },
-            })
-        });
-        let fluidity_now = &*fluidity_at;
-        // The return's fluidity: the nodes' at the centre of the point's cell (module docs).
-        interpolated
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, g_hat)| {
-                *g_hat = grid_field::at_cell_centre(&grid, &fluidity, next, points.position[k])
-                    .unwrap_or(fluidity_now[k]);
             });
+            *g_hat = centres[cell(points.position[k])].unwrap_or(*g);
+        });
         *nodal.field_mut("fluidity") = fluidity;
         *nodal.field_mut("trial_pressure") = pressure;
         *nodal.field_mut("trial_ratio") = ratio;
