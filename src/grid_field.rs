@@ -35,6 +35,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
+use crate::obstacle::HeldNode;
 use crate::resources::{Segment, Side, Wall};
 use crate::step::bands::Shared;
 use crate::step::{Bands, Location};
@@ -270,7 +271,11 @@ impl NodeCondition {
 /// A condition per side of the domain; periodic sides wrap whatever is set here. The nodes
 /// a wall segment covers (`Walls::at`) take the segment's wall's default condition instead
 /// ([`NodeCondition::default_for`]): an `Open` orifice in a `NoSlip` floor lets the field
-/// through.
+/// through. The nodes an obstacle holds (`crate::obstacle`) take their obstacle's wall's
+/// default too: a `NoSlip` obstacle fixes the field at zero on those of its nodes the
+/// material reaches (the first row inside its surface, so the condition sits less than a
+/// cell inside the surface), any other leaves them free, the nodes deeper inside being
+/// inactive, which makes the surface zero flux.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FieldWalls<'a> {
     pub left: NodeCondition,
@@ -278,6 +283,8 @@ pub struct FieldWalls<'a> {
     pub bottom: NodeCondition,
     pub top: NodeCondition,
     pub segments: &'a [Segment],
+    /// The scene's obstacles' nodes (`Obstacles::held_nodes`; empty without obstacles).
+    pub obstacles: &'a [HeldNode],
 }
 
 impl FieldWalls<'_> {
@@ -446,7 +453,47 @@ fn fix_walls(
             });
         }
     }
+    // The obstacles' nodes the material reaches; inward is out of the obstacle, along the
+    // larger component of its outward normal.
+    let nx = grid.nodes_along(0);
+    for held in walls.obstacles {
+        let n = held.node;
+        if !field.active(n) || is_fixed[n] {
+            continue;
+        }
+        let NodeCondition::Fixed(value) = NodeCondition::default_for(held.wall) else {
+            continue;
+        };
+        field.value[n] = value;
+        is_fixed[n] = true;
+        let axis = usize::from(held.normal.y.abs() > held.normal.x.abs());
+        let sign = if held.normal[axis] > 0.0 { 1 } else { -1 };
+        let (i, j) = (n % nx, n / nx);
+        fixed.push(FixedNode {
+            node: n,
+            inward: [1, 2].map(|k| step_from(grid, axis, i, j, sign * k)),
+        });
+    }
     (is_fixed, fixed)
+}
+
+/// The node `k` nodes from `(i, j)` along `axis`, wrapping on a periodic axis; `None` past a
+/// bounded edge.
+fn step_from(grid: &GridGeometry, axis: usize, i: usize, j: usize, k: isize) -> Option<usize> {
+    let count = grid.nodes_along(axis) as isize;
+    let here = if axis == 0 { i } else { j } as isize + k;
+    let there = if grid.periodic[axis] {
+        here.rem_euclid(count)
+    } else if (0..count).contains(&here) {
+        here
+    } else {
+        return None;
+    } as usize;
+    Some(if axis == 0 {
+        grid.index(there, j)
+    } else {
+        grid.index(i, there)
+    })
 }
 
 /// The neighbours of node `(i, j)` along `axis` (`-1` and `+1`), wrapping on a periodic axis;
@@ -650,6 +697,7 @@ mod tests {
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
         segments: &[],
+        obstacles: &[],
     };
 
     /// The centre of a cell reads the mean of its active corners, wrapping on a periodic

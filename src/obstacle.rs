@@ -78,11 +78,11 @@ pub fn surface_velocity(v: DVec2, n: DVec2, wall: Wall) -> DVec2 {
 }
 
 /// A grid node an obstacle holds: its index, the outward normal there and the surface law.
-#[derive(Clone, Copy, Debug)]
-struct HeldNode {
-    node: usize,
-    normal: DVec2,
-    wall: Wall,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldNode {
+    pub node: usize,
+    pub normal: DVec2,
+    pub wall: Wall,
 }
 
 /// The scene's obstacles and the grid nodes they hold (a resource; empty without obstacles).
@@ -145,6 +145,11 @@ impl Obstacles {
     /// them with the box's walls).
     pub fn held(&self) -> impl Iterator<Item = (usize, DVec2, Wall)> + '_ {
         self.nodes.iter().map(|h| (h.node, h.normal, h.wall))
+    }
+
+    /// The held nodes as a slice (a grid field's conditions, `grid_field::FieldWalls`).
+    pub fn held_nodes(&self) -> &[HeldNode] {
+        &self.nodes
     }
 
     /// Where a point moving from `from` to `to` ends, and its velocity `v`: `to` when no

@@ -164,3 +164,100 @@ fn a_layer_twice_as_deep_runs_faster_than_bagnold_says_as_the_1d_model_does() {
         "ratio {ratio:.4}: not distinct from the local {local:.4}"
     );
 }
+
+/// A layer of `fraction` `H_stop` at 25 degrees, `CELLS` deep, 1 x 1 points per cell, on a
+/// rough (`NoSlip`) obstacle two cells thick over a smooth box floor instead of on the rough
+/// floor itself: the obstacle holds the grid's rows at 0, `h` and `2 h`, and the layer rests
+/// on the last, as the other rests on the floor's nodes. Its state every 0.01 s to `end`.
+fn layer_on_obstacle(fraction: f64, end: f64) -> Vec<LayerState> {
+    let stop = ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians());
+    let (depth, h) = (fraction * stop, fraction * stop / CELLS);
+    let (width, base) = (4.0 * h, 2.0 * h);
+    let mut states = Vec::new();
+    run_layer(
+        &ps1_nonlocal_ron(""),
+        ANGLE,
+        // The top of the layer, two cells up: `run_layer` takes the cell size from it and
+        // starts the stress from it.
+        base + depth,
+        CELLS + 2.0,
+        end,
+        0.01,
+        &[
+            "bodies.layer.points_per_cell=1".to_string(),
+            "walls.bottom=Slip".to_string(),
+            format!(
+                "bodies.layer.shape=Rectangle(min: (0.0, {base:e}), max: ({width:e}, {:e}))",
+                base + depth
+            ),
+            // Just above `2 h`, so that the row at `2 h` is inside.
+            format!(
+                "obstacles=[(shape: Rectangle(min: (0.0, 0.0), max: ({width:e}, {:e})), \
+                 wall: NoSlip)]",
+                base * (1.0 + 1e-9)
+            ),
+        ],
+        None,
+        |s| states.push(*s),
+    )
+    .unwrap();
+    states
+}
+
+/// A rough obstacle holds the fluidity at zero on its nodes as a rough wall does (issue 40),
+/// so a layer below the stopping height comes to rest on it. Before, an obstacle's nodes
+/// were left free (zero flux, as at a free surface), and the same layer kept flowing.
+#[test]
+fn on_a_rough_obstacle_a_layer_below_the_stopping_height_comes_to_rest() {
+    let states = layer_on_obstacle(0.9, 2.0);
+    let end = states.last().unwrap();
+    assert!(
+        end.mean_speed.abs() < 1e-6 && end.max_speed < 1e-6 && end.flowing == 0.0,
+        "mean speed {:.3e} m/s, largest {:.3e} m/s, {} flowing at {} s",
+        end.mean_speed,
+        end.max_speed,
+        end.flowing,
+        end.time
+    );
+    let peak = states.iter().map(|s| s.max_speed).fold(0.0, f64::max);
+    assert!(peak > 1e-6, "never moved ({peak:.3e} m/s)");
+}
+
+/// And a layer above it runs on the obstacle at the speed it runs at on the rough floor: the
+/// condition sits where the floor's does, on the nodes the layer rests on.
+#[test]
+fn on_a_rough_obstacle_a_layer_flows_as_on_a_rough_floor() {
+    let (on_obstacle, on_floor) = std::thread::scope(|scope| {
+        let obstacle = scope.spawn(|| layer_on_obstacle(2.0, 1.5));
+        let floor = {
+            let stop = ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians());
+            let mut states = Vec::new();
+            run_layer(
+                &ps1_nonlocal_ron(""),
+                ANGLE,
+                2.0 * stop,
+                CELLS,
+                1.5,
+                0.01,
+                &["bodies.layer.points_per_cell=1".to_string()],
+                None,
+                |s| states.push(*s),
+            )
+            .unwrap();
+            states
+        };
+        (obstacle.join().unwrap(), floor)
+    });
+    let (a, b) = (on_obstacle.last().unwrap(), on_floor.last().unwrap());
+    eprintln!(
+        "mean speed at {} s: {:.5e} m/s on the obstacle, {:.5e} on the floor",
+        a.time, a.mean_speed, b.mean_speed
+    );
+    assert!(b.mean_speed > 1e-3, "the floor's layer does not flow");
+    assert!(
+        (a.mean_speed / b.mean_speed - 1.0).abs() < 0.01,
+        "{:.4e} m/s on the obstacle against {:.4e} on the floor",
+        a.mean_speed,
+        b.mean_speed
+    );
+}

@@ -17,8 +17,8 @@
 //!    and seeding flag are the field's columns, [`FLUIDITY`] and [`SEEDED`]): each point's elastic trial stress; the
 //!    seeding rule (below) on its `g`; the dense points' `g` and trial pressure `p` scattered
 //!    to the nodes with their volumes as weights; the nodal Laplacian of `g` with the walls'
-//!    conditions (`g = 0` on no-slip walls, zero flux elsewhere, settable per wall); each
-//!    point's ratio were it returned with its cell's present fluidity,
+//!    conditions (`g = 0` on no-slip walls and obstacles, zero flux elsewhere, settable per
+//!    wall); each point's ratio were it returned with its cell's present fluidity,
 //!    `q = tau_tr/(p + G dt g_cell)`, scattered the same way; and at each free node the
 //!    equation above with the Laplacian explicit and everything else implicit, `mu` being
 //!    `q_i (p_i + G dt g_i)/(p_i + G dt g)` of the unknown `g`: one scalar root, found by a
@@ -84,6 +84,7 @@ use crate::body::{Phase, PointStates, Points};
 use crate::field::Field;
 use crate::grid::GridGeometry;
 use crate::grid_field::{self, FieldColumns, FieldWalls, GridFields, NodeCondition, StartBands};
+use crate::obstacle::Obstacles;
 use crate::registry::Item;
 use crate::resources::{Boundaries, Clock, Wall, Walls};
 use crate::step::Location;
@@ -141,9 +142,10 @@ pub struct FluidityWalls {
 }
 
 impl FluidityWalls {
-    /// The conditions on the grid field, given the scene's walls; the wall segments take
-    /// their own wall's default (`NodeCondition::default_for`).
-    pub fn resolve<'a>(&self, walls: &'a Walls) -> FieldWalls<'a> {
+    /// The conditions on the grid field, given the scene's walls and obstacles; the wall
+    /// segments and the obstacles take their own wall's default
+    /// (`NodeCondition::default_for`: zero on a `NoSlip` obstacle, zero flux on any other).
+    pub fn resolve<'a>(&self, walls: &'a Walls, obstacles: &'a Obstacles) -> FieldWalls<'a> {
         let side = |choice: Option<FluidityWall>, wall: Wall| match choice {
             None => NodeCondition::default_for(wall),
             Some(FluidityWall::Zero) => NodeCondition::Fixed(0.0),
@@ -155,6 +157,7 @@ impl FluidityWalls {
             bottom: side(self.bottom, walls.bottom),
             top: side(self.top, walls.top),
             segments: &walls.segments,
+            obstacles: obstacles.held_nodes(),
         }
     }
 }
@@ -545,6 +548,7 @@ pub struct FluidityScratch {
 pub fn advance_fluidity(
     grid: Res<GridGeometry>,
     boundaries: Res<Boundaries>,
+    obstacles: Res<Obstacles>,
     clock: Res<Clock>,
     mut bodies: Query<FluidityBody>,
     mut scratch: Local<FluidityScratch>,
@@ -556,7 +560,7 @@ pub fn advance_fluidity(
         let [fluidity_at, seeded_at, interpolated] = columns
             .many_mut([FLUIDITY, SEEDED, INTERPOLATED])
             .expect("a Nonlocal body carries the fluidity's columns");
-        let walls = params.walls.resolve(&boundaries.0);
+        let walls = params.walls.resolve(&boundaries.0, &obstacles);
         // The elastic trial of every point, and the seeding rule on the dense ones.
         scratch.trials.clear();
         scratch.trials.par_extend(

@@ -121,6 +121,7 @@ fn a_creep_slab_matches_the_cosh_profile_to_second_order() {
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
         segments: &[],
+        obstacles: &[],
     };
     let mut errors = Vec::new();
     for cells in [10, 20, 40] {
@@ -175,6 +176,7 @@ fn a_small_mode_about_zero_grows_at_the_linear_rate() {
         bottom: NodeCondition::ZeroFlux,
         top: NodeCondition::ZeroFlux,
         segments: &[],
+        obstacles: &[],
     };
     let amplitude = |g: &NodalScalar| {
         2.0 / cells as f64

@@ -86,6 +86,7 @@ const INSULATED: FieldWalls<'static> = FieldWalls {
     bottom: NodeCondition::ZeroFlux,
     top: NodeCondition::ZeroFlux,
     segments: &[],
+    obstacles: &[],
 };
 
 impl Field for Tracer {
