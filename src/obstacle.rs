@@ -141,6 +141,19 @@ impl Obstacles {
         self.shapes.is_empty()
     }
 
+    /// Whether `x` lies inside an obstacle.
+    pub fn contains(&self, x: DVec2) -> bool {
+        self.shapes.iter().any(|(shape, _)| {
+            let (lo, hi) = shape.bounds();
+            x.cmpge(lo).all() && x.cmple(hi).all() && shape.contains(x)
+        })
+    }
+
+    /// Each obstacle's bounding box (lower and upper corners).
+    pub fn bounds(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+        self.shapes.iter().map(|(shape, _)| shape.bounds())
+    }
+
     /// The held nodes: index, outward normal, surface law (`step::grid_update` applies
     /// them with the box's walls).
     pub fn held(&self) -> impl Iterator<Item = (usize, DVec2, Wall)> + '_ {
