@@ -31,7 +31,6 @@
 //! `ParticleToGrid` by `keep_start_bands` whenever a body carries a field).
 
 use bevy_ecs::prelude::*;
-use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::grid::GridGeometry;
@@ -424,14 +423,14 @@ fn fix_walls(
 ) -> (Vec<bool>, Vec<FixedNode>) {
     let mut is_fixed = vec![false; grid.node_count()];
     let mut fixed = Vec::new();
+    let nx = grid.nodes_along(0);
     for (side, axis, low) in Side::ALL {
         let condition = walls.side(side);
         let segmented = walls.segments.iter().any(|s| s.side == side);
         if grid.periodic[axis] || (!segmented && condition == NodeCondition::ZeroFlux) {
             continue;
         }
-        let stride = if axis == 0 { 1 } else { grid.nodes_along(0) };
-        let along = grid.nodes_along(axis);
+        let sign = if low { 1 } else { -1 };
         for n in grid.side_nodes(axis, low) {
             if !field.active(n) || is_fixed[n] {
                 continue;
@@ -445,17 +444,14 @@ fn fix_walls(
             };
             field.value[n] = value;
             is_fixed[n] = true;
-            let inward =
-                |k: usize| (k < along).then(|| if low { n + k * stride } else { n - k * stride });
             fixed.push(FixedNode {
                 node: n,
-                inward: [inward(1), inward(2)],
+                inward: [1, 2].map(|k| step_from(grid, axis, n % nx, n / nx, sign * k)),
             });
         }
     }
     // The obstacles' nodes the material reaches; inward is out of the obstacle, along the
     // larger component of its outward normal.
-    let nx = grid.nodes_along(0);
     for held in walls.obstacles {
         let n = held.node;
         if !field.active(n) || is_fixed[n] {
@@ -468,10 +464,9 @@ fn fix_walls(
         is_fixed[n] = true;
         let axis = usize::from(held.normal.y.abs() > held.normal.x.abs());
         let sign = if held.normal[axis] > 0.0 { 1 } else { -1 };
-        let (i, j) = (n % nx, n / nx);
         fixed.push(FixedNode {
             node: n,
-            inward: [1, 2].map(|k| step_from(grid, axis, i, j, sign * k)),
+            inward: [1, 2].map(|k| step_from(grid, axis, n % nx, n / nx, sign * k)),
         });
     }
     (is_fixed, fixed)
@@ -494,37 +489,6 @@ fn step_from(grid: &GridGeometry, axis: usize, i: usize, j: usize, k: isize) -> 
     } else {
         grid.index(i, there)
     })
-}
-
-/// The neighbours of node `(i, j)` along `axis` (`-1` and `+1`), wrapping on a periodic axis;
-/// `None` past a bounded edge.
-#[inline]
-fn neighbours(grid: &GridGeometry, axis: usize, i: usize, j: usize) -> [Option<usize>; 2] {
-    let count = grid.nodes_along(axis);
-    let at = |k: usize| {
-        if axis == 0 {
-            grid.index(k, j)
-        } else {
-            grid.index(i, k)
-        }
-    };
-    let k = if axis == 0 { i } else { j };
-    let periodic = grid.periodic[axis];
-    let below = if k > 0 {
-        Some(at(k - 1))
-    } else if periodic {
-        Some(at(count - 1))
-    } else {
-        None
-    };
-    let above = if k + 1 < count {
-        Some(at(k + 1))
-    } else if periodic {
-        Some(at(0))
-    } else {
-        None
-    };
-    [below, above]
 }
 
 /// The 5-point Laplacian of `field` on its active nodes (zero on inactive ones), into `out`,
@@ -558,7 +522,7 @@ pub fn laplacian(
             let mut sum = 0.0;
             for axis in 0..2 {
                 let live = |m: Option<usize>| m.filter(|&m| field.active(m));
-                let [a, b] = neighbours(grid, axis, i, j).map(live);
+                let [a, b] = [-1, 1].map(|k| live(step_from(grid, axis, i, j, k)));
                 let (va, vb) = match (a, b) {
                     (Some(a), Some(b)) => (field.value[a], field.value[b]),
                     (Some(a), None) => (field.value[a], field.value[a]),
@@ -606,24 +570,13 @@ pub fn gather_active<const N: usize>(
     (weight > 0.0).then(|| sum.map(|s| s / weight))
 }
 
-/// The value at the centre of the cell holding `x`: the mean of `nodal` over the cell's
-/// active corner nodes (the interpolation at the centre, with linear or CPDI shape functions,
-/// renormalised like [`gather_active`]); `None` if none is active. A law that pairs the field
-/// with the velocity gradient reads it here: the gradient is constant over a cell, so a value
-/// that varies inside one would set points of one cell against each other.
-pub fn at_cell_centre(
-    grid: &GridGeometry,
-    field: &NodalScalar,
-    nodal: &[f64],
-    x: DVec2,
-) -> Option<f64> {
-    let [i, j] = grid.cell_at(x, 1.0 / grid.cell_size);
-    centre_of(grid, field, nodal, i, j)
-}
-
-/// [`at_cell_centre`] for every cell at once, into `out` (indexed as `GridGeometry::cell_of`
-/// numbers cells): a loop over many points then looks its cell up instead of visiting the
-/// corners for each point.
+/// The value at the centre of each cell, into `out` (indexed as `GridGeometry::cell_of`
+/// numbers cells): the mean of `nodal` over the cell's active corner nodes (the interpolation
+/// at the centre, with linear or CPDI shape functions, renormalised like [`gather_active`]);
+/// `None` if none is active. A law that pairs the field with the velocity gradient reads it
+/// here, at the cell of each point: the gradient is constant over a cell, so a value that
+/// varies inside one would set points of one cell against each other. Computed once per
+/// cell, a loop over many points then looks its cell up.
 pub fn cell_centres(
     grid: &GridGeometry,
     field: &NodalScalar,
@@ -673,6 +626,8 @@ fn centre_of(
 
 #[cfg(test)]
 mod tests {
+    use glam::DVec2;
+
     use super::*;
 
     fn line(cells: usize, h: f64, periodic_x: bool) -> GridGeometry {
@@ -715,11 +670,22 @@ mod tests {
             .map(|n| (n % nx) as f64 + 2.0 * (n / nx) as f64)
             .collect();
         let mut field = field_of(values.clone());
-        let at = |field: &NodalScalar, x: f64, y: f64| {
-            at_cell_centre(&grid, field, &values, DVec2::new(x, y))
+        let mut table = Vec::new();
+        let mut at = |field: &NodalScalar, x: f64, y: f64| {
+            cell_centres(&grid, field, &values, &mut table);
+            assert_eq!(table.len(), 12);
+            table[grid.cell_of(DVec2::new(x, y))]
         };
+        // Every cell reads the linear field at its centre; the last column's cells close on
+        // the first column's nodes: (3 + 0) / 2 along x.
+        for j in 0..3 {
+            for i in 0..4 {
+                let along_x = if i == 3 { 1.5 } else { i as f64 + 0.5 };
+                let expected = along_x + 2.0 * (j as f64 + 0.5);
+                assert_eq!(at(&field, i as f64 + 0.3, j as f64 + 0.6), Some(expected));
+            }
+        }
         assert_eq!(at(&field, 1.2, 2.9), Some(1.5 + 2.0 * 2.5));
-        // The last column's cell closes on the first column's nodes: (3 + 0) / 2 along x.
         assert_eq!(at(&field, 3.7, 0.1), Some(1.5 + 2.0 * 0.5));
         // An inactive corner is left out.
         field.weight[grid.index(2, 3)] = 0.0;
@@ -728,22 +694,6 @@ mod tests {
             field.weight[n] = 0.0;
         }
         assert_eq!(at(&field, 1.2, 2.9), None);
-        // The table of every cell holds what each cell's centre reads, bit for bit.
-        let mut table = Vec::new();
-        cell_centres(&grid, &field, &values, &mut table);
-        assert_eq!(table.len(), 12);
-        for j in 0..3 {
-            for i in 0..4 {
-                let x = DVec2::new(i as f64 + 0.3, j as f64 + 0.6);
-                let (from_table, read) = (table[grid.cell_of(x)], at(&field, x.x, x.y));
-                assert_eq!(
-                    from_table.map(f64::to_bits),
-                    read.map(f64::to_bits),
-                    "{i} {j}"
-                );
-            }
-        }
-        assert_eq!(table[grid.cell_of(DVec2::new(1.2, 2.9))], None);
     }
 
     /// Scattering two values together gives each the weights and means, bit for bit, of a

@@ -85,6 +85,12 @@ pub struct HeldNode {
     pub wall: Wall,
 }
 
+/// Whether `shape` contains `x`, its bounding box tested first (a cheap rejection).
+fn inside(shape: &dyn Shape, x: DVec2) -> bool {
+    let (lo, hi) = shape.bounds();
+    !(x.cmplt(lo).any() || x.cmpgt(hi).any()) && shape.contains(x)
+}
+
 /// The scene's obstacles and the grid nodes they hold (a resource; empty without obstacles).
 #[derive(Resource, Default)]
 pub struct Obstacles {
@@ -143,10 +149,7 @@ impl Obstacles {
 
     /// Whether `x` lies inside an obstacle.
     pub fn contains(&self, x: DVec2) -> bool {
-        self.shapes.iter().any(|(shape, _)| {
-            let (lo, hi) = shape.bounds();
-            x.cmpge(lo).all() && x.cmple(hi).all() && shape.contains(x)
-        })
+        self.shapes.iter().any(|(shape, _)| inside(&**shape, x))
     }
 
     /// Each obstacle's bounding box (lower and upper corners).
@@ -173,8 +176,7 @@ impl Obstacles {
     pub fn stop(&self, from: DVec2, to: DVec2, v: &mut DVec2) -> DVec2 {
         let mut at = to;
         for (shape, _) in &self.shapes {
-            let (lo, hi) = shape.bounds();
-            if at.cmplt(lo).any() || at.cmpgt(hi).any() || !shape.contains(at) {
+            if !inside(&**shape, at) {
                 continue;
             }
             let outside = if shape.contains(from) {

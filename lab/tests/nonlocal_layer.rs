@@ -18,24 +18,35 @@ use regolith_lab::verify::nonlocal::{
 const ANGLE: f64 = 25.0;
 const CELLS: f64 = 6.0;
 
-/// The layer of `fraction` times the stopping height at 25 degrees at `points` x `points`
-/// points per cell, started at rest in its lithostatic state: its state every 0.01 s to `end`.
-fn layer(fraction: f64, points: usize, end: f64) -> Vec<LayerState> {
-    let stop = ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians());
+/// The stopping height at 25 degrees.
+fn stopping_height() -> f64 {
+    ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians())
+}
+
+/// `run_layer` at 25 degrees, started at rest in its lithostatic state: the layer's state
+/// every 0.01 s to `end`.
+fn states(depth: f64, cells: f64, end: f64, sets: &[String]) -> Vec<LayerState> {
     let mut states = Vec::new();
     run_layer(
         &ps1_nonlocal_ron(""),
         ANGLE,
-        fraction * stop,
-        CELLS,
+        depth,
+        cells,
         end,
         0.01,
-        &[format!("bodies.layer.points_per_cell={points}")],
+        sets,
         None,
         |s| states.push(*s),
     )
     .unwrap();
     states
+}
+
+/// The layer of `fraction` times the stopping height at 25 degrees at `points` x `points`
+/// points per cell, `CELLS` deep on the rough floor.
+fn layer(fraction: f64, points: usize, end: f64) -> Vec<LayerState> {
+    let sets = [format!("bodies.layer.points_per_cell={points}")];
+    states(fraction * stopping_height(), CELLS, end, &sets)
 }
 
 /// Below the stopping height: by 2 s the layer is at rest, every point solid.
@@ -114,19 +125,8 @@ fn a_layer_twice_as_deep_runs_faster_than_bagnold_says_as_the_1d_model_does() {
     let th = ANGLE.to_radians();
     let stop = material.stopping_height(th);
     let steady = |fraction: f64, cells: f64, end: f64| {
-        let mut states = Vec::new();
-        run_layer(
-            &ps1_nonlocal_ron(""),
-            ANGLE,
-            fraction * stop,
-            cells,
-            end,
-            0.01,
-            &["bodies.layer.points_per_cell=1".to_string()],
-            None,
-            |s| states.push(*s),
-        )
-        .unwrap();
+        let sets = ["bodies.layer.points_per_cell=1".to_string()];
+        let states = states(fraction * stop, cells, end, &sets);
         let (before, end) = (&states[states.len() - 21], states.last().unwrap());
         let change = end.mean_speed / before.mean_speed - 1.0;
         assert!(
@@ -170,19 +170,15 @@ fn a_layer_twice_as_deep_runs_faster_than_bagnold_says_as_the_1d_model_does() {
 /// floor itself: the obstacle holds the grid's rows at 0, `h` and `2 h`, and the layer rests
 /// on the last, as the other rests on the floor's nodes. Its state every 0.01 s to `end`.
 fn layer_on_obstacle(fraction: f64, end: f64) -> Vec<LayerState> {
-    let stop = ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians());
-    let (depth, h) = (fraction * stop, fraction * stop / CELLS);
+    let depth = fraction * stopping_height();
+    let h = depth / CELLS;
     let (width, base) = (4.0 * h, 2.0 * h);
-    let mut states = Vec::new();
-    run_layer(
-        &ps1_nonlocal_ron(""),
-        ANGLE,
-        // The top of the layer, two cells up: `run_layer` takes the cell size from it and
-        // starts the stress from it.
+    // The top of the layer, two cells up: `run_layer` takes the cell size from it and starts
+    // the stress from it.
+    states(
         base + depth,
         CELLS + 2.0,
         end,
-        0.01,
         &[
             "bodies.layer.points_per_cell=1".to_string(),
             "walls.bottom=Slip".to_string(),
@@ -197,11 +193,7 @@ fn layer_on_obstacle(fraction: f64, end: f64) -> Vec<LayerState> {
                 base * (1.0 + 1e-9)
             ),
         ],
-        None,
-        |s| states.push(*s),
     )
-    .unwrap();
-    states
 }
 
 /// A rough obstacle holds the fluidity at zero on its nodes as a rough wall does (issue 40),
@@ -229,23 +221,7 @@ fn on_a_rough_obstacle_a_layer_below_the_stopping_height_comes_to_rest() {
 fn on_a_rough_obstacle_a_layer_flows_as_on_a_rough_floor() {
     let (on_obstacle, on_floor) = std::thread::scope(|scope| {
         let obstacle = scope.spawn(|| layer_on_obstacle(2.0, 1.5));
-        let floor = {
-            let stop = ps1_nonlocal(DEFAULT_AMPLITUDE).stopping_height(ANGLE.to_radians());
-            let mut states = Vec::new();
-            run_layer(
-                &ps1_nonlocal_ron(""),
-                ANGLE,
-                2.0 * stop,
-                CELLS,
-                1.5,
-                0.01,
-                &["bodies.layer.points_per_cell=1".to_string()],
-                None,
-                |s| states.push(*s),
-            )
-            .unwrap();
-            states
-        };
+        let floor = layer(2.0, 1, 1.5);
         (obstacle.join().unwrap(), floor)
     });
     let (a, b) = (on_obstacle.last().unwrap(), on_floor.last().unwrap());

@@ -32,7 +32,7 @@
 //!    Each point then adds the interpolated increment `sum N (g_new - g_old)` to its `g`
 //!    (over the active nodes, renormalised: `grid_field::gather_active`).
 //! 2. The update (per point): the elastic trial again, and the return with `g_hat`, the new
-//!    nodal fluidity at the centre of the point's cell (`grid_field::at_cell_centre`, left in
+//!    nodal fluidity at the centre of the point's cell (`grid_field::cell_centres`, left in
 //!    column [`INTERPOLATED`] by the field, which the material reads by name):
 //!    `tau = tau_tr p/(p + G dt g_hat)`, `gamma_dot_p = g_hat mu`. The velocity gradient is
 //!    constant over a cell, so a `g_hat` interpolated to each point would make the points of
@@ -612,16 +612,11 @@ pub fn advance_fluidity(
         // Each point's ratio if it returned with the fluidity its cell has now: the node's
         // ratio at its own fluidity is their mean (module docs, step 1).
         let gdt = params.base.shear * dt;
-        let inv_h = 1.0 / grid.cell_size;
-        let cell = |x| {
-            let [i, j] = grid.cell_at(x, inv_h);
-            j * grid.cells[0] + i
-        };
         grid_field::cell_centres(&grid, &fluidity, &fluidity.value, &mut scratch.centres);
         let centres = &scratch.centres;
         grid_field::scatter(&grid, location, bands, &mut ratio, |k| {
             dense(k).map(|(v, p, tau)| {
-                let g = centres[cell(points.position[k])];
+                let g = centres[grid.cell_of(points.position[k])];
                 (v, tau / (p + gdt * g.unwrap_or(0.0)))
             })
         });
@@ -673,7 +668,7 @@ pub fn advance_fluidity(
                     None => params.seed(history, p, tau / p),
                 },
             });
-            *g_hat = centres[cell(points.position[k])].unwrap_or(*g);
+            *g_hat = centres[grid.cell_of(points.position[k])].unwrap_or(*g);
         });
         *nodal.field_mut("fluidity") = fluidity;
         *nodal.field_mut("trial_pressure") = pressure;

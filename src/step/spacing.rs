@@ -188,8 +188,8 @@ pub struct SpacingScratch {
     places: Vec<Vec<Place>>,
     /// Per body, per point: `g_p` (empty for a body whose points do not move).
     gradient: Vec<Vec<DVec2>>,
-    /// `Vref_i` of every node when the scene has obstacles (`reference_volumes`), found at
-    /// the first correction: obstacles and grid are fixed for the run.
+    /// `Vref_i` of every node (`reference_volumes`), found at the first correction:
+    /// obstacles and grid are fixed for the run.
     reference: Vec<f64>,
 }
 
@@ -328,7 +328,7 @@ pub fn correct_spacing(
         gradient,
         reference,
     } = &mut *scratch;
-    if !obstacles.is_empty() && reference.len() != grid.node_count() {
+    if reference.len() != grid.node_count() {
         reference_volumes(grid, &obstacles, reference);
     }
     order.clear();
@@ -358,14 +358,8 @@ pub fn correct_spacing(
     }
     // 2-3. H_i = Vpts_i - Vref_i where over-filled beyond round-off, or (two-sided)
     // under-filled beyond the slack but at least `pull_above` full; 0 elsewhere.
-    let nx = grid.nodes_along(0);
     let mut active = false;
-    for (k, node) in fill.iter_mut().enumerate() {
-        let reference = if obstacles.is_empty() {
-            reference_volume(grid, k % nx, k / nx)
-        } else {
-            reference[k]
-        };
+    for (node, &reference) in fill.iter_mut().zip(&*reference) {
         let over = *node - reference;
         let pulls = *node >= constants.pull_above * reference && over < -SLACK * reference;
         *node = if over > ROUND_OFF * reference || pulls {
