@@ -129,6 +129,10 @@ pub struct GridField {
     /// Mass gradient `sum_p m_p grad S_i(x_p)` (out of the body at its surface nodes);
     /// filled only when contact needs normals.
     pub mass_gradient: Vec<DVec2>,
+    /// Velocity and acceleration packed per node for the vector gathers, copied from the
+    /// two arrays above just before the gathers (`GridField::pack_motion`, module
+    /// `kernels`); empty when the scalar kernels run. Never written otherwise.
+    pub motion: Vec<NodeMotion>,
     /// Nodes lighter than this drop their internal force (docs/model.md §2, step 3).
     pub mass_tolerance: f64,
     /// Total force the other bodies exert on this one through contact this step (N per
@@ -156,6 +160,7 @@ impl GridField {
             } else {
                 Vec::new()
             },
+            motion: Vec::new(),
             mass_tolerance,
             contact_force: DVec2::ZERO,
             written: 0..nodes,
@@ -199,10 +204,39 @@ impl GridField {
         }
     }
 
+    /// Copies each active node's velocity and acceleration into [`GridField::motion`], the
+    /// packed layout the vector gathers read; call after the last change to either in a
+    /// step and before the gathers. Nodes outside [`GridField::active`] are not read by this
+    /// step's footprints and are left as they are.
+    pub fn pack_motion(&mut self) {
+        let nodes = self.active();
+        if self.motion.len() != self.velocity.len() {
+            self.motion
+                .resize(self.velocity.len(), NodeMotion::default());
+        }
+        let (v, a) = (
+            &self.velocity[nodes.clone()],
+            &self.acceleration[nodes.clone()],
+        );
+        for ((m, v), a) in self.motion[nodes].iter_mut().zip(v).zip(a) {
+            *m = NodeMotion([v.x, v.y, a.x, a.y]);
+        }
+    }
+
     /// Bytes held per node (for memory estimates).
     pub fn bytes_per_node(with_normals: bool) -> usize {
         8 + 16 * if with_normals { 5 } else { 4 }
     }
+}
+
+/// One node's velocity and acceleration, side by side for one 256-bit load (module `kernels`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub struct NodeMotion(pub [f64; 4]);
+
+impl NodeMotion {
+    /// Bytes per node (for memory estimates).
+    pub const BYTES: usize = std::mem::size_of::<NodeMotion>();
 }
 
 /// Nodes per block of the parallel clear.

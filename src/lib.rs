@@ -27,6 +27,7 @@ pub mod geometry;
 pub mod grid;
 pub mod grid_field;
 pub mod integration;
+pub mod kernels;
 pub mod linefit;
 pub mod material;
 pub mod obstacle;

@@ -294,6 +294,11 @@ pub fn summarize(
         cell_size: grid.cell_size,
         gravity: scene.gravity.to_array(),
         threads: rayon::current_num_threads(),
+        kernels: sim
+            .world
+            .get_resource::<crate::kernels::Kernels>()
+            .map_or("scalar", |k| k.name())
+            .to_string(),
         host: host(),
         regolith_version: env!("CARGO_PKG_VERSION").to_string(),
         wall_s,
@@ -379,6 +384,11 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
         }
     };
     estimate.grid_bytes += spacing_grid;
+    // The packed copy of each body's velocities and accelerations the vector gathers read.
+    let packed = match sim.world.get_resource::<crate::kernels::Kernels>() {
+        Some(k) if k.packs() => crate::grid::NodeMotion::BYTES,
+        _ => 0,
+    };
     for (spec, n) in scene.bodies.iter().zip(counts) {
         let normals = scene
             .contact
@@ -386,7 +396,7 @@ pub fn memory_estimate(sim: &mut Simulation, scene: &Scene) -> MemoryEstimate {
         estimate.points += n;
         estimate.point_bytes +=
             n * (bytes_per_point(&*spec.material, scene.transfer.affine()) + spacing_point);
-        estimate.grid_bytes += nodes * GridField::bytes_per_node(normals) + averaging;
+        estimate.grid_bytes += nodes * (GridField::bytes_per_node(normals) + packed) + averaging;
     }
     // The fields: their columns, a slot per point in the bands kept for their scatters, and
     // their nodal scalars.

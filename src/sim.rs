@@ -235,6 +235,7 @@ impl Simulation {
             transfer: scene.transfer.0.clone(),
             flip: scene.flip,
         });
+        world.insert_resource(crate::kernels::Kernels::detect());
         world.insert_resource(Health::default());
         world.insert_resource(OutputFaults::default());
         world.insert_resource(Timings::default());

@@ -481,5 +481,10 @@ pub(crate) fn check(
         memory.per_point(),
         mib(memory.grid_bytes)
     );
+    let kernels = sim.world.resource::<regolith::kernels::Kernels>();
+    println!(
+        "kernels: {} (REGOLITH_KERNELS=scalar runs the reference path)",
+        kernels.name()
+    );
     Ok(())
 }

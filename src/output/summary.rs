@@ -63,6 +63,8 @@ pub struct Summary {
     /// Body force per unit mass (m/s^2).
     pub gravity: [f64; 2],
     pub threads: usize,
+    /// The step's kernels: `avx2`, or `scalar` (the reference path; module `kernels`).
+    pub kernels: String,
     /// The machine the run ran on (its host name), for tables merged from many machines.
     pub host: String,
     /// The `regolith` version that produced the run.

@@ -187,6 +187,17 @@ impl<'a, T: Copy> Shared<'a, T> {
         Shared(slice.as_mut_ptr(), slice.len(), PhantomData)
     }
 
+    /// A pointer to `slice[i]`, for a write of `slice[i..i + k]` in one instruction.
+    ///
+    /// # Safety
+    /// As for `add_at`, for every index written through it.
+    #[inline]
+    pub unsafe fn at(&self, i: usize) -> *mut T {
+        debug_assert!(i < self.1, "index {i} outside the slice of {}", self.1);
+        // SAFETY: in bounds, per the caller's guarantee.
+        unsafe { self.0.add(i) }
+    }
+
     /// `slice[i] = v`.
     ///
     /// # Safety

@@ -190,43 +190,80 @@ fn every_periodic_grid_gives_the_same_state_at_any_thread_count() {
     );
 }
 
-/// Every shipped scene's state after 40 steps is bitwise the same on 1 and 2 threads.
-#[test]
-fn every_shipped_scene_gives_the_same_state_on_one_and_two_threads() {
+/// Every shipped scene, loaded.
+fn shipped_scenes() -> Vec<(std::path::PathBuf, regolith::Scene)> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut scenes: Vec<_> = std::fs::read_dir(&dir)
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "ron"))
         .collect();
-    scenes.sort();
+    paths.sort();
     let registries = regolith::Regolith::default().registries();
-    let state = |threads: usize, scene: &regolith::Scene| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let mut sim = Simulation::new(scene);
-            for _ in 0..40 {
-                if sim.finished() {
-                    break;
-                }
-                sim.step().unwrap();
-            }
-            let names: Vec<String> = sim.bodies().into_iter().map(|b| b.0.name).collect();
-            names
-                .iter()
-                .map(|n| sim.state_hash(n).unwrap())
-                .collect::<Vec<_>>()
+    paths
+        .into_iter()
+        .map(|path| {
+            let (scene, _) = regolith::Scene::load(&path, &[], &registries).unwrap();
+            (path, scene)
         })
-    };
-    for path in &scenes {
-        let (scene, _) = regolith::Scene::load(path, &[], &registries).unwrap();
+        .collect()
+}
+
+/// Each body's state hash after 40 steps of `scene` (fewer if it ends first) on `threads`
+/// threads, with `kernels` (the processor's own if `None`).
+fn state_after_40_steps(
+    scene: &regolith::Scene,
+    threads: usize,
+    kernels: Option<regolith::kernels::Kernels>,
+) -> Vec<String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut sim = Simulation::new(scene);
+        if let Some(kernels) = kernels {
+            sim.world.insert_resource(kernels);
+        }
+        for _ in 0..40 {
+            if sim.finished() {
+                break;
+            }
+            sim.step().unwrap();
+        }
+        let names: Vec<String> = sim.bodies().into_iter().map(|b| b.0.name).collect();
+        names
+            .iter()
+            .map(|n| sim.state_hash(n).unwrap())
+            .collect::<Vec<_>>()
+    })
+}
+
+/// Every shipped scene's state after 40 steps is bitwise the same on 1 and 2 threads.
+#[test]
+fn every_shipped_scene_gives_the_same_state_on_one_and_two_threads() {
+    for (path, scene) in &shipped_scenes() {
         assert_eq!(
-            state(1, &scene),
-            state(2, &scene),
+            state_after_40_steps(scene, 1, None),
+            state_after_40_steps(scene, 2, None),
             "{}: the state depends on the thread count",
+            path.display()
+        );
+    }
+}
+
+/// Every shipped scene's state after 40 steps is bitwise the same with the vector kernels
+/// this processor runs and with the scalar reference path (module `kernels`).
+#[test]
+fn every_shipped_scene_gives_the_same_state_with_vector_and_scalar_kernels() {
+    use regolith::kernels::Kernels;
+    let widest = Kernels::widest();
+    eprintln!("comparing {widest:?} with the scalar kernels");
+    for (path, scene) in &shipped_scenes() {
+        assert_eq!(
+            state_after_40_steps(scene, 2, Some(widest)),
+            state_after_40_steps(scene, 2, Some(Kernels::SCALAR)),
+            "{}: the state depends on the kernels",
             path.display()
         );
     }

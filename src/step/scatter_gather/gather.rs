@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use crate::body::{Body, Points};
 use crate::grid::{GridField, GridGeometry};
+use crate::kernels::{Kernels, NodeSource};
 use crate::step::locate::Location;
 
 use crate::resources::{Clock, VelocityRule};
@@ -25,12 +26,14 @@ pub(super) fn new_velocity(v: DVec2, v_grid: DVec2, a_grid: DVec2, dt: f64, pull
     flip + pull * (v_grid - flip)
 }
 
-/// What every velocity update reads: the step, the grid, the scene's rule and the bodies.
+/// What every velocity update reads: the step, the grid, the scene's rule, the kernels and
+/// the bodies.
 #[derive(SystemParam)]
 pub struct VelocityUpdate<'w, 's> {
     clock: Res<'w, Clock>,
     grid: Res<'w, GridGeometry>,
     rule: Res<'w, VelocityRule>,
+    kernels: Res<'w, Kernels>,
     bodies: Query<
         'w,
         's,
@@ -38,22 +41,27 @@ pub struct VelocityUpdate<'w, 's> {
             &'static Body,
             &'static mut Points,
             &'static Location,
-            &'static GridField,
+            &'static mut GridField,
         ),
     >,
 }
 
 impl VelocityUpdate<'_, '_> {
-    /// Runs `update(grid, points, location, field, dt, pull)` for every body, with the
-    /// body's pull ([`VelocityRule::pull`]) for this step.
+    /// Runs `update(grid, points, location, nodes, dt, pull)` for every body, with the
+    /// body's nodes as its kernels read them (packed first if they read packed nodes) and
+    /// its pull ([`VelocityRule::pull`]) for this step.
     pub(super) fn each(
         &mut self,
-        mut update: impl FnMut(&GridGeometry, &mut Points, &Location, &GridField, f64, f64),
+        mut update: impl FnMut(&GridGeometry, &mut Points, &Location, NodeSource, f64, f64),
     ) {
-        let (dt, grid) = (self.clock.dt, &*self.grid);
-        for (body, mut points, location, field) in &mut self.bodies {
+        let (dt, grid, kernels) = (self.clock.dt, &*self.grid, *self.kernels);
+        for (body, mut points, location, mut field) in &mut self.bodies {
+            if kernels.packs() {
+                field.pack_motion();
+            }
             let pull = self.rule.pull(dt, grid.cell_size, body.wave_speed);
-            update(grid, &mut points, location, field, dt, pull);
+            let nodes = NodeSource::of(&field, kernels);
+            update(grid, &mut points, location, nodes, dt, pull);
         }
     }
 }
@@ -61,7 +69,7 @@ impl VelocityUpdate<'_, '_> {
 /// USL without an affine field: the FLIP/PIC velocity update, advection velocity and
 /// velocity gradient `L = sum v_i (outer) grad S`, in one pass.
 pub fn grid_to_particle(mut bodies: VelocityUpdate) {
-    bodies.each(|_, points, location, field, dt, pull| {
+    bodies.each(|_, points, location, nodes, dt, pull| {
         location
             .footprints()
             .par_iter()
@@ -69,7 +77,7 @@ pub fn grid_to_particle(mut bodies: VelocityUpdate) {
             .zip(points.advection.par_iter_mut())
             .zip(points.velocity_gradient.par_iter_mut())
             .for_each(|(((f, v), adv), l)| {
-                let g = f.gather_velocity::<true>(&field.velocity, &field.acceleration);
+                let g = nodes.gather_velocity::<true>(f);
                 let (v_grid, grad, a_grid) = (g.value, g.gradient, g.acceleration);
                 *v = new_velocity(*v, v_grid, a_grid, dt, pull);
                 *adv = v_grid;
@@ -90,7 +98,7 @@ pub fn apic_gather<S: Scheme>(
     x: DVec2,
     velocity: &[DVec2],
 ) -> (DVec2, DMat2, DMat2) {
-    let (g, c) = apic_sums::<S, false>(f, grid, x, velocity, &[]);
+    let (g, c) = apic_sums::<S, false>(f, grid, x, &NodeSource::unpacked(velocity, &[]));
     (g.value, g.gradient, c)
 }
 
@@ -101,37 +109,35 @@ fn apic_sums<S: Scheme, const ACCELERATION: bool>(
     f: &Footprint,
     grid: &GridGeometry,
     x: DVec2,
-    velocity: &[DVec2],
-    acceleration: &[DVec2],
+    nodes: &NodeSource,
 ) -> (Gathered, DMat2) {
     if S::AFFINE_IS_GRADIENT {
-        let g = f.gather_velocity::<ACCELERATION>(velocity, acceleration);
+        let g = nodes.gather_velocity::<ACCELERATION>(f);
         return (g, g.gradient);
     }
     let (dx, dy) = f.offsets(grid, x);
-    let g = f.gather::<true, ACCELERATION>(velocity, acceleration, &dx, &dy);
+    let g = nodes.gather::<true, ACCELERATION>(f, &dx, &dy);
     (g, g.affine_b * f.affine_inertia(&dx, &dy).inverse())
 }
 
 /// USL with an affine field (APIC, affine FLIP): the point's velocity update, its affine
 /// field and the velocity gradient, in one pass.
 pub fn affine_to_particle<S: Scheme>(mut bodies: VelocityUpdate) {
-    bodies.each(|grid, points, location, field, dt, pull| {
-        gather_affine::<S>(grid, points, location, field, Some((dt, pull)));
+    bodies.each(|grid, points, location, nodes, dt, pull| {
+        gather_affine::<S>(grid, points, location, nodes, Some((dt, pull)));
     });
 }
 
-/// `L` and the affine field `C_p` of every point from `field`'s velocities, and with
+/// `L` and the affine field `C_p` of every point from the velocities of `nodes`, and with
 /// `update = Some((dt, pull))` the point's velocity ([`new_velocity`]) and advection velocity
 /// too.
 pub(super) fn gather_affine<S: Scheme>(
     grid: &GridGeometry,
     points: &mut Points,
     location: &Location,
-    field: &GridField,
+    nodes: NodeSource,
     update: Option<(f64, f64)>,
 ) {
-    let (velocity, acceleration) = (&field.velocity, &field.acceleration);
     location
         .footprints()
         .par_iter()
@@ -148,16 +154,16 @@ pub(super) fn gather_affine<S: Scheme>(
             let (g, affine) = match update {
                 // Pulled all the way to the grid (APIC): the acceleration is not needed.
                 Some((dt, pull)) if pull != 1.0 => {
-                    let (g, affine) = apic_sums::<S, true>(f, grid, x, velocity, acceleration);
+                    let (g, affine) = apic_sums::<S, true>(f, grid, x, &nodes);
                     *v = new_velocity(*v, g.value, g.acceleration, dt, pull);
                     (g, affine)
                 }
                 Some(_) => {
-                    let (g, affine) = apic_sums::<S, false>(f, grid, x, velocity, &[]);
+                    let (g, affine) = apic_sums::<S, false>(f, grid, x, &nodes);
                     *v = g.value;
                     (g, affine)
                 }
-                None => apic_sums::<S, false>(f, grid, x, velocity, &[]),
+                None => apic_sums::<S, false>(f, grid, x, &nodes),
             };
             if update.is_some() {
                 *adv = g.value;

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::body::Points;
 use crate::grid::{GridField, GridGeometry};
+use crate::kernels::NodeSource;
 use crate::obstacle::Obstacles;
 use crate::step::grid_update::apply_walls;
 use crate::step::locate::Location;
@@ -19,14 +20,14 @@ use crate::shape_functions::Scheme;
 /// velocity. With an affine transfer the affine field is taken in pass 3 from the remapped
 /// velocities, like `L` and for the same reason (nodes of tiny mass).
 pub fn musl_velocity(mut bodies: VelocityUpdate) {
-    bodies.each(|_, points, location, field, dt, pull| {
+    bodies.each(|_, points, location, nodes, dt, pull| {
         location
             .footprints()
             .par_iter()
             .zip(points.velocity.par_iter_mut())
             .zip(points.advection.par_iter_mut())
             .for_each(|((f, v), adv)| {
-                let g = f.gather_velocity::<true>(&field.velocity, &field.acceleration);
+                let g = nodes.gather_velocity::<true>(f);
                 *v = new_velocity(*v, g.value, g.acceleration, dt, pull);
                 *adv = g.value;
             });
@@ -81,6 +82,7 @@ pub fn musl_apic_gradient<S: Scheme>(
     mut bodies: Query<(&mut Points, &Location, &GridField)>,
 ) {
     for (mut points, location, field) in &mut bodies {
-        gather_affine::<S>(&grid, &mut points, location, field, None);
+        let nodes = NodeSource::unpacked(&field.velocity, &field.acceleration);
+        gather_affine::<S>(&grid, &mut points, location, nodes, None);
     }
 }
