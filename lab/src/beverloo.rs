@@ -12,6 +12,11 @@
 //! refinement, `k` between 0 and the smallest opening over `d`. Uncertainties are jackknife
 //! estimates over the openings (one left out at a time), which take in the scatter of the
 //! points about the law as well as their own errors.
+//!
+//! With three grids, each finer by the same ratio, the rate at each opening all three ran is
+//! also extrapolated to zero cell size (Richardson, with the order the three rates show) and
+//! the law fitted to those: the nearest the runs come to the model's own `C`, `k` and `beta`
+//! when the grids are not yet converged.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -193,8 +198,85 @@ pub fn by_grid(mut runs: Vec<Opening>) -> Vec<Vec<Opening>> {
     grids
 }
 
-/// The report: per grid, the table of openings and both fits (`beta = 3/2` and free), as
-/// Markdown.
+/// One opening's rate extrapolated to zero cell size from the three finest grids.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Extrapolated {
+    /// The opening as the runs saw it, `rate` the extrapolated one and `rate_error` its
+    /// distance from the finest grid's (how far the extrapolation reaches), `cell` zero.
+    pub opening: Opening,
+    /// The three grids' rates, coarsest first.
+    pub rates: [f64; 3],
+    /// The order of convergence the three show: `ln((W2 - W1) / (W3 - W2)) / ln r`.
+    pub order: f64,
+}
+
+/// Richardson extrapolation of each opening the three finest grids share, when their cells
+/// shrink by one ratio `r` (within 1%) and the rates change monotonically with shrinking
+/// steps (an order above zero); openings that do not are left out. `(r, extrapolated)`, or
+/// `None` with fewer than three grids or grids of unequal ratios.
+pub fn extrapolate(grids: &[Vec<Opening>]) -> Option<(f64, Vec<Extrapolated>)> {
+    let [g1, g2, g3] = grids.get(grids.len().checked_sub(3)?..)? else {
+        return None;
+    };
+    let r = g1[0].cell / g2[0].cell;
+    if (g2[0].cell / g3[0].cell / r - 1.0).abs() > 0.01 || r <= 1.0 {
+        return None;
+    }
+    let at = |g: &[Opening], w: f64| {
+        g.iter()
+            .find(|p| (p.width - w).abs() <= 1e-9 * w)
+            .map(|p| p.rate)
+    };
+    let out = g3
+        .iter()
+        .filter_map(|fine| {
+            let rates = [at(g1, fine.width)?, at(g2, fine.width)?, fine.rate];
+            let (e12, e23) = (rates[1] - rates[0], rates[2] - rates[1]);
+            let order = (e12 / e23).ln() / r.ln();
+            // Same sign and a smaller second step: otherwise not converging (NaN included).
+            if order.is_nan() || order <= 0.0 {
+                return None;
+            }
+            let rate = rates[2] + e23 / (r.powf(order) - 1.0);
+            Some(Extrapolated {
+                opening: Opening {
+                    rate,
+                    rate_error: (rate - rates[2]).abs(),
+                    cell: 0.0,
+                    ..fine.clone()
+                },
+                rates,
+                order,
+            })
+        })
+        .collect();
+    Some((r, out))
+}
+
+/// Both fits of `points` as Markdown lines.
+fn fits(md: &mut String, points: &[Opening], d: f64) {
+    for (label, beta) in [
+        ("beta = 3/2 (Beverloo, 2D)", Some(1.5)),
+        ("beta free", None),
+    ] {
+        match fit(points, d, beta) {
+            Some(f) => {
+                let _ = writeln!(
+                    md,
+                    "- {label}: C = {:.3} +- {:.3}, k = {:.2} +- {:.2}, beta = {:.3} +- {:.3}, rms residual {:.2} kg/(m s)",
+                    f.c, f.c_error, f.k, f.k_error, f.beta, f.beta_error, f.rms
+                );
+            }
+            None => {
+                let _ = writeln!(md, "- {label}: too few openings to fit");
+            }
+        }
+    }
+    md.push('\n');
+}
+
+/// The report: per grid, the table of openings and both fits (`beta = 3/2` and free), and
+/// with three grids the rates extrapolated to zero cell size and their fits, as Markdown.
 pub fn report(grids: &[Vec<Opening>], d: f64) -> String {
     let mut md = String::new();
     for g in grids {
@@ -220,24 +302,35 @@ pub fn report(grids: &[Vec<Opening>], d: f64) -> String {
             );
         }
         md.push('\n');
-        for (label, beta) in [
-            ("beta = 3/2 (Beverloo, 2D)", Some(1.5)),
-            ("beta free", None),
-        ] {
-            match fit(g, d, beta) {
-                Some(f) => {
-                    let _ = writeln!(
-                        md,
-                        "- {label}: C = {:.3} +- {:.3}, k = {:.2} +- {:.2}, beta = {:.3} +- {:.3}, rms residual {:.2} kg/(m s)",
-                        f.c, f.c_error, f.k, f.k_error, f.beta, f.beta_error, f.rms
-                    );
-                }
-                None => {
-                    let _ = writeln!(md, "- {label}: too few openings to fit");
-                }
-            }
+        fits(&mut md, g, d);
+    }
+    if let Some((r, ex)) = extrapolate(grids) {
+        let _ = writeln!(
+            md,
+            "**Extrapolated to zero cell size** (Richardson from the three finest grids, cells \
+             shrinking by {r:.2}; {} of {} openings converging; the error column is the \
+             extrapolation's distance from the finest grid)\n",
+            ex.len(),
+            grids[grids.len() - 1].len()
+        );
+        md.push_str("| D (m) | D / d | W, coarsest to finest (kg/(m s)) | order | W extrapolated (kg/(m s)) |\n|---|---|---|---|---|\n");
+        for e in &ex {
+            let _ = writeln!(
+                md,
+                "| {:.4} | {:.1} | {:.2} / {:.2} / {:.2} | {:.2} | {:.2} +- {:.2} |",
+                e.opening.width,
+                e.opening.width / d,
+                e.rates[0],
+                e.rates[1],
+                e.rates[2],
+                e.order,
+                e.opening.rate,
+                e.opening.rate_error
+            );
         }
         md.push('\n');
+        let points: Vec<Opening> = ex.into_iter().map(|e| e.opening).collect();
+        fits(&mut md, &points, d);
     }
     md
 }
@@ -247,10 +340,18 @@ pub fn report(grids: &[Vec<Opening>], d: f64) -> String {
 pub fn figure(grids: &[Vec<Opening>], d: f64, path: &Path) -> Result<(), String> {
     plot::register_font()?;
     let mut series = Vec::new();
-    for g in grids {
+    let extrapolated = extrapolate(grids)
+        .map(|(_, ex)| ex.into_iter().map(|e| e.opening).collect::<Vec<_>>())
+        .filter(|points| !points.is_empty());
+    for g in grids.iter().chain(&extrapolated) {
         let h = g[0].cell;
+        let name = if h > 0.0 {
+            format!("h = {:.1} mm", h * 1e3)
+        } else {
+            "h -> 0 (extrapolated)".to_string()
+        };
         series.push(Series {
-            label: format!("h = {:.1} mm", h * 1e3),
+            label: name.clone(),
             points: g.iter().map(|p| (p.width / d, p.rate)).collect(),
             hollow: false,
             band: None,
@@ -258,7 +359,7 @@ pub fn figure(grids: &[Vec<Opening>], d: f64, path: &Path) -> Result<(), String>
         if let Some(f) = fit(g, d, Some(1.5)) {
             let (lo, hi) = (g[0].width, g[g.len() - 1].width);
             series.push(Series {
-                label: format!("fit, h = {:.1} mm: C {:.2}, k {:.1}", h * 1e3, f.c, f.k),
+                label: format!("fit, {name}: C {:.2}, k {:.1}", f.c, f.k),
                 points: (0..16)
                     .map(|i| {
                         let w = lo + (hi - lo) * i as f64 / 15.0;
@@ -313,6 +414,35 @@ mod tests {
         );
         // Too few openings for three parameters.
         assert!(fit(&openings(0.8, 4.0, 1.25, d)[..3], d, None).is_none());
+    }
+
+    /// Rates that converge as `W(h) = W0 - A h^p` on three grids halving the cell give back
+    /// `W0` and `p`; a grid whose rate overshoots leaves its opening out.
+    #[test]
+    fn three_grids_extrapolate_to_the_rate_they_converge_to() {
+        let grid = |h: f64| {
+            let mut g = openings(1.0, 1.0, 1.5, 0.005);
+            for p in &mut g {
+                p.cell = h;
+                p.rate -= 40.0 * (h / 0.01).powf(1.3) * p.width / 0.12;
+            }
+            g
+        };
+        let mut grids = vec![grid(0.02), grid(0.01), grid(0.005), grid(0.0025)];
+        grids[3][4].rate = grids[2][4].rate - 1.0;
+        let exact = openings(1.0, 1.0, 1.5, 0.005);
+        let (r, ex) = extrapolate(&grids).unwrap();
+        assert!((r - 2.0).abs() < 1e-12);
+        assert_eq!(ex.len(), 4, "the overshooting opening is left out");
+        for (e, w) in ex.iter().zip(&exact) {
+            assert!((e.order - 1.3).abs() < 1e-9, "{e:?}");
+            assert!((e.opening.rate - w.rate).abs() < 1e-9 * w.rate, "{e:?}");
+            assert!(e.opening.cell == 0.0 && e.opening.rate_error > 0.0);
+        }
+        assert!(report(&grids, 0.005).contains("Extrapolated to zero cell size"));
+        // Unequal ratios, or two grids: nothing extrapolated.
+        assert!(extrapolate(&[grid(0.02), grid(0.01), grid(0.004)]).is_none());
+        assert!(extrapolate(&grids[..2]).is_none());
     }
 
     #[test]
