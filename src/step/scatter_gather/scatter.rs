@@ -45,22 +45,8 @@ pub fn particle_to_grid(
             (true, true) => scatter_body::<false, true>,
             (false, true) => scatter_body::<true, true>,
         };
-        let body = Body {
-            points,
-            location,
-            bands,
-            cells,
-        };
-        scatter(&grid, gravity.0, body, &mut field);
+        scatter(&grid, gravity.0, points, location, &mut field, bands, cells);
     }
-}
-
-/// What one body's scatter reads.
-struct Body<'a> {
-    points: &'a Points,
-    location: &'a Location,
-    bands: &'a Bands,
-    cells: Option<&'a CellDilatation>,
 }
 
 /// One body's scatter for `particle_to_grid`; `APIC` says whether its points carry an
@@ -69,15 +55,12 @@ struct Body<'a> {
 fn scatter_body<const APIC: bool, const AVX2: bool>(
     grid: &GridGeometry,
     g: DVec2,
-    body: Body,
+    points: &Points,
+    location: &Location,
     field: &mut GridField,
+    bands: &Bands,
+    cells: Option<&CellDilatation>,
 ) {
-    let Body {
-        points,
-        location,
-        bands,
-        cells,
-    } = body;
     field.will_write(bands.node_span(grid));
     let normals = !field.mass_gradient.is_empty();
     let nodes = grid.node_count();
@@ -305,10 +288,10 @@ mod avx2 {
             // SAFETY: as above, for the row's third entry.
             unsafe {
                 mass.add_at(n + 2, _mm_cvtsd_f64(_mm_mul_pd(w, m2)));
-                add2v(momentum, n + 2, _mm_mul_pd(w, at));
-                add2v(force, n + 2, forces);
+                add2(momentum, n + 2, _mm_mul_pd(w, at));
+                add2(force, n + 2, forces);
                 if normals {
-                    add2v(gradient, n + 2, _mm_mul_pd(m2, grad));
+                    add2(gradient, n + 2, _mm_mul_pd(m2, grad));
                 }
             }
         }
@@ -321,25 +304,13 @@ mod avx2 {
         unsafe { _mm256_castpd256_pd128(v) }
     }
 
-    /// `slice[i] += v[0]; slice[i + 1] += v[1]`.
+    /// Adds `v` to the 16 bytes at `slice[i]`: `slice[i]` and `slice[i + 1]` of a slice of
+    /// f64, `slice[i]` of a slice of 2-vectors.
     ///
     /// # Safety
-    /// As for [`Shared::add_at`], at `i` and `i + 1`.
+    /// As for [`Shared::add_at`], for every element those 16 bytes cover.
     #[inline(always)]
-    unsafe fn add2(target: Shared<f64>, i: usize, v: __m128d) {
-        // SAFETY: per the contract.
-        unsafe {
-            let p = target.at(i).cast::<f64>();
-            _mm_storeu_pd(p, _mm_add_pd(_mm_loadu_pd(p), v));
-        }
-    }
-
-    /// `slice[i] += (v[0], v[1])` for a slice of 2-vectors.
-    ///
-    /// # Safety
-    /// As for [`Shared::add_at`].
-    #[inline(always)]
-    unsafe fn add2v(target: Shared<DVec2>, i: usize, v: __m128d) {
+    unsafe fn add2<T: Copy>(target: Shared<T>, i: usize, v: __m128d) {
         // SAFETY: per the contract.
         unsafe {
             let p = target.at(i).cast::<f64>();
