@@ -720,6 +720,7 @@ mod tests {
         }
         let mut world = World::new();
         world.insert_resource(grid.clone());
+        world.insert_resource(crate::kernels::Kernels::widest());
         let body = world
             .spawn((points, Location::default(), Bands::default()))
             .id();

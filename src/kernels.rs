@@ -25,8 +25,8 @@
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 
-use crate::grid::{GridField, NodeMotion};
-use crate::shape_functions::{Footprint, Gathered};
+use crate::grid::{GridField, GridGeometry, NodeMotion};
+use crate::shape_functions::{CpdiFixed, Footprint, Gathered, Scheme};
 
 /// Which kernels the step runs. Made only by [`Kernels::widest`] (and so
 /// [`Kernels::detect`]) or as [`Kernels::SCALAR`]: the vector kernels' `unsafe` relies on
@@ -73,6 +73,29 @@ impl Kernels {
     /// Whether the gathers read the packed nodes ([`GridField::pack_motion`]).
     pub fn packs(self) -> bool {
         self.avx2()
+    }
+
+    /// Every point's footprint: `out[p]` is `Footprint::new::<S>(grid, positions[p],
+    /// half_widths[p])` to the bit. With AVX2, fixed-extent CPDI's are built four points at
+    /// a time (`avx2::cpdi_footprints`); the other schemes, per point.
+    pub fn footprints<S: Scheme>(
+        self,
+        grid: &GridGeometry,
+        positions: &[DVec2],
+        half_widths: &[f64],
+        out: &mut [Footprint],
+    ) {
+        assert!(positions.len() == out.len() && half_widths.len() == out.len());
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2() && std::any::TypeId::of::<S>() == std::any::TypeId::of::<CpdiFixed>() {
+            // SAFETY: `Kernels::avx2` is true only after the processor was found to have
+            // AVX2 (`Kernels::widest`).
+            unsafe { avx2_footprints::cpdi_footprints(grid, positions, half_widths, out) };
+            return;
+        }
+        for ((f, x), &a) in out.iter_mut().zip(positions).zip(half_widths) {
+            *f = Footprint::new::<S>(grid, *x, a);
+        }
     }
 
     /// Name for reports (`regolith check`, summary.json's `kernels`).
@@ -210,6 +233,154 @@ mod avx2 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+mod avx2_footprints {
+    use super::*;
+    use std::arch::x86_64::*;
+
+    /// One axis of the grid as `CpdiFixed::axis` and the footprint's `entries` see it.
+    struct Axis {
+        origin: f64,
+        cells: f64,
+        nodes: i32,
+        stride: u32,
+        periodic: bool,
+    }
+
+    /// One axis of four points' footprints, lane `j` for point `j`: each point's first node
+    /// and its three weights and gradients (per metre).
+    struct Lanes {
+        base: [i32; 4],
+        w: [[f64; 4]; 3],
+        g: [[f64; 4]; 3],
+    }
+
+    impl Axis {
+        fn of(grid: &GridGeometry, a: usize) -> Axis {
+            let nodes = grid.nodes_along(a);
+            Axis {
+                origin: grid.origin[a],
+                cells: grid.cells[a] as f64,
+                nodes: i32::try_from(nodes).unwrap_or(i32::MAX),
+                stride: if a == 0 {
+                    1
+                } else {
+                    grid.nodes_along(0) as u32
+                },
+                periodic: grid.periodic[a],
+            }
+        }
+
+        /// `CpdiFixed::axis` and the interior branch of `entries` for four points, each
+        /// operation the scalar one (no fused multiply-add; `max`/`min` with their operands
+        /// placed so that ties and NaN give the scalar result). `None` where a footprint
+        /// reaches past an edge of the axis, the caller then building those four points with
+        /// the scalar rule. A coordinate the 32-bit truncation cannot hold (NaN, infinite, or
+        /// 2^31 cells or more, where the scalar truncates to 64 bits) converts to `i32::MIN`
+        /// and is declined with them.
+        #[target_feature(enable = "avx2")]
+        fn lanes(&self, x: __m256d, alpha: __m256d, inv_h: __m256d) -> Option<Lanes> {
+            let zero = _mm256_setzero_pd();
+            let one = _mm256_set1_pd(1.0);
+            let n = _mm256_set1_pd(self.cells);
+            let xi = _mm256_mul_pd(_mm256_sub_pd(x, _mm256_set1_pd(self.origin)), inv_h);
+            let (lo, hi) = if self.periodic {
+                (_mm256_sub_pd(xi, alpha), _mm256_add_pd(xi, alpha))
+            } else {
+                // `clamp(0, n)`: max(0, x) is `0 > x ? 0 : x`, min(n, x) is `n < x ? n : x`.
+                let xi = _mm256_min_pd(n, _mm256_max_pd(zero, xi));
+                (
+                    _mm256_max_pd(_mm256_sub_pd(xi, alpha), zero),
+                    _mm256_min_pd(_mm256_add_pd(xi, alpha), n),
+                )
+            };
+            let abs = |v: __m256d| _mm256_andnot_pd(_mm256_set1_pd(-0.0), v);
+            // `fast_floor`: truncate, and one less where that rounded up. Exact below 2^31
+            // cells; beyond, the truncation gives `i32::MIN` and the group is declined below.
+            let t = _mm256_cvtepi32_pd(_mm256_cvttpd_epi32(lo));
+            let mut base =
+                _mm256_blendv_pd(t, _mm256_sub_pd(t, one), _mm256_cmp_pd::<_CMP_GT_OQ>(t, lo));
+            if !self.periodic {
+                let last = _mm256_sub_pd(n, one);
+                base = _mm256_blendv_pd(base, last, _mm256_cmp_pd::<_CMP_GE_OQ>(base, n));
+            }
+            let mut first = [0i32; 4];
+            // SAFETY: `first` holds four i32.
+            unsafe { _mm_storeu_si128(first.as_mut_ptr().cast(), _mm256_cvttpd_epi32(base)) };
+            if first.iter().any(|&b| b < 0 || b >= self.nodes - 2) {
+                return None;
+            }
+            let inv_width = _mm256_div_pd(one, _mm256_sub_pd(hi, lo));
+            let hat = |d: __m256d| _mm256_max_pd(_mm256_sub_pd(one, abs(d)), zero);
+            let mut out = Lanes {
+                base: first,
+                w: [[0.0; 4]; 3],
+                g: [[0.0; 4]; 3],
+            };
+            for k in 0..3 {
+                let node = _mm256_add_pd(base, _mm256_set1_pd(k as f64));
+                let (nl, nh) = (hat(_mm256_sub_pd(lo, node)), hat(_mm256_sub_pd(hi, node)));
+                let w = _mm256_mul_pd(_mm256_set1_pd(0.5), _mm256_add_pd(nl, nh));
+                let dw = _mm256_mul_pd(_mm256_sub_pd(nh, nl), inv_width);
+                let g = _mm256_mul_pd(dw, inv_h);
+                // SAFETY: each destination holds four f64.
+                unsafe {
+                    _mm256_storeu_pd(out.w[k].as_mut_ptr(), w);
+                    _mm256_storeu_pd(out.g[k].as_mut_ptr(), g);
+                }
+            }
+            Some(out)
+        }
+    }
+
+    /// [`Kernels::footprints`] for `CpdiFixed`, four points per lane group; a group that
+    /// [`Axis::lanes`] declines, and the last `len % 4` points, go through the scalar rule.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn cpdi_footprints(
+        grid: &GridGeometry,
+        positions: &[DVec2],
+        half_widths: &[f64],
+        out: &mut [Footprint],
+    ) {
+        let inv_h = 1.0 / grid.cell_size;
+        let (x_axis, y_axis) = (Axis::of(grid, 0), Axis::of(grid, 1));
+        let lanes_of = |v: [f64; 4]| _mm256_setr_pd(v[0], v[1], v[2], v[3]);
+        let mut groups = out.chunks_exact_mut(4);
+        let mut sources = positions.chunks_exact(4).zip(half_widths.chunks_exact(4));
+        for (f, (x, a)) in (&mut groups).zip(&mut sources) {
+            let inv = _mm256_set1_pd(inv_h);
+            let alpha = _mm256_mul_pd(lanes_of([a[0], a[1], a[2], a[3]]), inv);
+            let xs = lanes_of([x[0].x, x[1].x, x[2].x, x[3].x]);
+            let ys = lanes_of([x[0].y, x[1].y, x[2].y, x[3].y]);
+            match (x_axis.lanes(xs, alpha, inv), y_axis.lanes(ys, alpha, inv)) {
+                (Some(lx), Some(ly)) => {
+                    for (j, f) in f.iter_mut().enumerate() {
+                        let (bx, by) = (lx.base[j] as u32, ly.base[j] as u32 * y_axis.stride);
+                        let step = y_axis.stride;
+                        *f = Footprint {
+                            column: [bx, bx + 1, bx + 2],
+                            row: [by, by + step, by + 2 * step],
+                            wx: [lx.w[0][j], lx.w[1][j], lx.w[2][j]],
+                            wy: [ly.w[0][j], ly.w[1][j], ly.w[2][j]],
+                            gx: [lx.g[0][j], lx.g[1][j], lx.g[2][j]],
+                            gy: [ly.g[0][j], ly.g[1][j], ly.g[2][j]],
+                        };
+                    }
+                }
+                _ => {
+                    for j in 0..4 {
+                        f[j] = Footprint::new::<CpdiFixed>(grid, x[j], a[j]);
+                    }
+                }
+            }
+        }
+        let rest = positions.len() - positions.len() % 4;
+        for (j, f) in groups.into_remainder().iter_mut().enumerate() {
+            *f = Footprint::new::<CpdiFixed>(grid, positions[rest + j], half_widths[rest + j]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -287,6 +458,70 @@ mod tests {
         }
         assert_eq!(compared, 4000);
         eprintln!("compared the scalar gather with {:?}", kernels);
+    }
+
+    /// Every kernel this processor runs builds the scalar rule's footprints to the bit, for
+    /// each scheme, on grids periodic along neither, one or both axes, for points inside,
+    /// on and next to the edges (footprints clipped, clamped or wrapped), outside the grid
+    /// and at non-finite or huge coordinates, in runs that are not a multiple of four.
+    #[test]
+    fn the_vector_footprints_are_the_scalar_footprints_to_the_bit() {
+        fn compare<S: Scheme>(grid: &GridGeometry, x: &[DVec2], a: &[f64]) -> usize {
+            let scalar: Vec<Footprint> = x
+                .iter()
+                .zip(a)
+                .map(|(&x, &a)| Footprint::new::<S>(grid, x, a))
+                .collect();
+            let mut built = vec![Footprint::default(); x.len()];
+            Kernels::widest().footprints::<S>(grid, x, a, &mut built);
+            for (p, (s, v)) in scalar.iter().zip(&built).enumerate() {
+                assert_eq!(
+                    format!("{s:?}"),
+                    format!("{v:?}"),
+                    "point {p} at {:?}",
+                    x[p]
+                );
+            }
+            x.len()
+        }
+        let mut next = numbers(11);
+        let mut compared = 0;
+        for periodic in [[false, false], [true, false], [false, true], [true, true]] {
+            let grid = GridGeometry {
+                origin: DVec2::new(-0.1, 0.2),
+                cell_size: 0.05,
+                cells: [12, 9],
+                periodic,
+            };
+            let size = grid.size();
+            let mut x = Vec::new();
+            let mut a = Vec::new();
+            for k in 0..4003 {
+                // Most points anywhere in the grid; some within a cell of an edge, on a node
+                // line or outside the grid.
+                let u = DVec2::new(next(), next());
+                let along = match k % 5 {
+                    0 => u * 0.02,
+                    1 => DVec2::ONE - u * 0.02,
+                    2 => (u * 12.0).floor() / 12.0,
+                    3 => u * 1.4 - DVec2::splat(0.2),
+                    _ => u,
+                };
+                x.push(grid.origin + along * size);
+                a.push(0.5 * grid.cell_size * next());
+            }
+            for (k, odd) in [f64::NAN, f64::INFINITY, -1e12, 3e9]
+                .into_iter()
+                .enumerate()
+            {
+                x[40 * k + 1].x = odd;
+                x[40 * k + 22].y = odd;
+            }
+            compared += compare::<CpdiFixed>(&grid, &x, &a);
+            compared += compare::<QuadraticBspline>(&grid, &x, &a);
+            compared += compare::<crate::shape_functions::Linear>(&grid, &x[..7], &a[..7]);
+        }
+        assert_eq!(compared, 4 * (2 * 4003 + 7));
     }
 
     /// Packing copies the active nodes and nothing else.

@@ -21,6 +21,7 @@ use super::bands::Bands;
 use crate::body::Points;
 use crate::grid::BandLayout;
 use crate::grid::GridGeometry;
+use crate::kernels::Kernels;
 use crate::shape_functions::{Footprint, Scheme};
 
 /// Where a body's points are (index = point index).
@@ -93,6 +94,7 @@ impl Location {
 /// last move are still current.
 pub fn locate_points<S: Scheme>(
     grid: Res<GridGeometry>,
+    kernels: Res<Kernels>,
     mut bodies: Query<(Ref<Points>, &mut Location, &mut Bands)>,
 ) {
     let grid = &*grid;
@@ -104,10 +106,14 @@ pub fn locate_points<S: Scheme>(
         location
             .footprint
             .resize(points.len(), Footprint::default());
+        // Chunks of a few hundred points: enough to amortise the parallel split, and a
+        // multiple of the vector kernels' four lanes.
+        const CHUNK: usize = 512;
         location
             .footprint
-            .par_iter_mut()
-            .zip(points.position.par_iter().zip(points.half_width.par_iter()))
-            .for_each(|(f, (x, &a))| *f = Footprint::new::<S>(grid, *x, a));
+            .par_chunks_mut(CHUNK)
+            .zip(points.position.par_chunks(CHUNK))
+            .zip(points.half_width.par_chunks(CHUNK))
+            .for_each(|((f, x), a)| kernels.footprints::<S>(grid, x, a, f));
     }
 }
