@@ -25,7 +25,7 @@
 use bevy_ecs::prelude::*;
 use glam::{DMat2, DVec2};
 
-use crate::grid::{GridField, GridGeometry, NodeMotion};
+use crate::grid::{BandLayout, GridField, GridGeometry, NodeMotion};
 use crate::shape_functions::{CpdiFixed, Footprint, Gathered, Scheme};
 
 /// Which kernels the step runs. Made only by [`Kernels::widest`] (and so
@@ -95,6 +95,31 @@ impl Kernels {
         }
         for ((f, x), &a) in out.iter_mut().zip(positions).zip(half_widths) {
             *f = Footprint::new::<S>(grid, *x, a);
+        }
+    }
+
+    /// Every point's cell (flat index) and band: `cells[p]` and `bands[p]` as
+    /// [`GridGeometry::cell_at`] and [`BandLayout::band_of_row`] give them for
+    /// `positions[p]`, four points at a time with AVX2.
+    pub fn cells(
+        self,
+        grid: &GridGeometry,
+        layout: &BandLayout,
+        positions: &[DVec2],
+        cells: &mut [u32],
+        bands: &mut [u32],
+    ) {
+        assert!(positions.len() == cells.len() && positions.len() == bands.len());
+        let inv_h = 1.0 / grid.cell_size;
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2() {
+            // SAFETY: `Kernels::avx2` is true only after the processor was found to have
+            // AVX2 (`Kernels::widest`).
+            unsafe { avx2_footprints::cells(grid, inv_h, layout, positions, cells, bands) };
+            return;
+        }
+        for ((c, b), x) in cells.iter_mut().zip(bands.iter_mut()).zip(positions) {
+            (*c, *b) = cell_and_band(grid, inv_h, layout, *x);
         }
     }
 
@@ -231,6 +256,13 @@ mod avx2 {
             },
         }
     }
+}
+
+/// The cell (flat index) and band of the point at `x`.
+#[inline]
+fn cell_and_band(grid: &GridGeometry, inv_h: f64, layout: &BandLayout, x: DVec2) -> (u32, u32) {
+    let [i, j] = grid.cell_at(x, inv_h);
+    ((j * grid.cells[0] + i) as u32, layout.band_of_row(j))
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -379,6 +411,57 @@ mod avx2_footprints {
             *f = Footprint::new::<CpdiFixed>(grid, positions[rest + j], half_widths[rest + j]);
         }
     }
+
+    /// [`Kernels::cells`] four points at a time: `GridGeometry::cell_at`'s saturating
+    /// truncation and clamp per lane (the minimum with the last cell taken in floating
+    /// point, so that a coordinate beyond `i32` or NaN gives what the scalar cast gives),
+    /// the bands per point from the rows.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn cells(
+        grid: &GridGeometry,
+        inv_h: f64,
+        layout: &BandLayout,
+        positions: &[DVec2],
+        cells: &mut [u32],
+        bands: &mut [u32],
+    ) {
+        let last = |a: usize| (grid.cells[a] - 1).min(i32::MAX as usize) as i32;
+        let (last_x, last_y) = (last(0), last(1));
+        let inv = _mm256_set1_pd(inv_h);
+        let along = |r: __m256d, last: i32| {
+            // `r as i32` saturates (NaN to 0); the clamp then keeps [0, last]. Taking the
+            // minimum with `last` first (NaN passes through, `min(a, b)` returning `b`)
+            // leaves only values the 32-bit truncation holds, or NaN and large negatives,
+            // which truncate to `i32::MIN` and are clamped to 0 like the scalar's.
+            let r = _mm256_min_pd(_mm256_set1_pd(last as f64), r);
+            _mm_max_epi32(_mm256_cvttpd_epi32(r), _mm_setzero_si128())
+        };
+        let columns = _mm_set1_epi32(grid.cells[0] as i32);
+        let mut groups = cells.chunks_exact_mut(4).zip(bands.chunks_exact_mut(4));
+        let mut sources = positions.chunks_exact(4);
+        for ((c, b), x) in (&mut groups).zip(&mut sources) {
+            let rel = |a: usize, origin: f64| {
+                let v = _mm256_setr_pd(x[0][a], x[1][a], x[2][a], x[3][a]);
+                _mm256_mul_pd(_mm256_sub_pd(v, _mm256_set1_pd(origin)), inv)
+            };
+            let i = along(rel(0, grid.origin.x), last_x);
+            let j = along(rel(1, grid.origin.y), last_y);
+            let flat = _mm_add_epi32(_mm_mullo_epi32(j, columns), i);
+            let mut rows = [0i32; 4];
+            // SAFETY: `c` and `rows` hold four 32-bit integers each.
+            unsafe {
+                _mm_storeu_si128(c.as_mut_ptr().cast(), flat);
+                _mm_storeu_si128(rows.as_mut_ptr().cast(), j);
+            }
+            for (b, row) in b.iter_mut().zip(rows) {
+                *b = layout.band_of_row(row as usize);
+            }
+        }
+        let rest = positions.len() - positions.len() % 4;
+        for (k, x) in positions[rest..].iter().enumerate() {
+            (cells[rest + k], bands[rest + k]) = super::cell_and_band(grid, inv_h, layout, *x);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -522,6 +605,56 @@ mod tests {
             compared += compare::<crate::shape_functions::Linear>(&grid, &x[..7], &a[..7]);
         }
         assert_eq!(compared, 4 * (2 * 4003 + 7));
+    }
+
+    /// Every kernel this processor runs finds the scalar rule's cells and bands, for points
+    /// inside, on cell lines, next to and beyond the edges, and at non-finite or huge
+    /// coordinates, on grids periodic or not, in runs that are not a multiple of four.
+    #[test]
+    fn the_vector_cells_are_the_scalar_cells() {
+        let mut next = numbers(5);
+        for periodic in [[false, false], [true, true]] {
+            let grid = GridGeometry {
+                origin: DVec2::new(0.3, -0.2),
+                cell_size: 0.04,
+                cells: [13, 22],
+                periodic,
+            };
+            let layout = BandLayout::of(&grid);
+            let size = grid.size();
+            let mut x: Vec<DVec2> = (0..2003)
+                .map(|k| {
+                    let u = DVec2::new(next(), next());
+                    let along = match k % 3 {
+                        0 => (u * 13.0).floor() / 13.0,
+                        1 => u * 1.6 - DVec2::splat(0.3),
+                        _ => u,
+                    };
+                    grid.origin + along * size
+                })
+                .collect();
+            let odd = [
+                f64::NAN,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                3e9,
+                -3e9,
+                1e300,
+                -0.5,
+            ];
+            for (k, v) in odd.into_iter().enumerate() {
+                x[30 * k + 2].x = v;
+                x[30 * k + 13].y = v;
+            }
+            let n = x.len();
+            let (mut cells, mut bands) = (vec![0; n], vec![0; n]);
+            Kernels::widest().cells(&grid, &layout, &x, &mut cells, &mut bands);
+            let inv_h = 1.0 / grid.cell_size;
+            for p in 0..n {
+                let expected = cell_and_band(&grid, inv_h, &layout, x[p]);
+                assert_eq!((cells[p], bands[p]), expected, "point {p} at {:?}", x[p]);
+            }
+        }
     }
 
     /// Packing copies the active nodes and nothing else.

@@ -14,6 +14,7 @@ use super::bands::{Bands, Shared};
 use super::locate::Location;
 use crate::body::Points;
 use crate::grid::GridGeometry;
+use crate::kernels::Kernels;
 
 /// Cells per block of the parallel per-cell passes.
 const CELL_BLOCK: usize = 4096;
@@ -169,6 +170,7 @@ pub fn average_dilatation(
 /// compressed (docs/numerics.md).
 pub fn cell_density(
     grid: Res<GridGeometry>,
+    kernels: Res<Kernels>,
     mut bodies: Query<(&mut Points, &mut CellDilatation, &mut Bands, &mut Location)>,
 ) {
     let grid = &*grid;
@@ -176,7 +178,7 @@ pub fn cell_density(
         let cells = &mut *cells;
         // Marked first, so that the tick the cells are found for is this system's own.
         points.set_changed();
-        location.find_cells_after_move(grid, &points, &mut bands);
+        location.find_cells_after_move(grid, *kernels, &points, &mut bands);
         let points = &mut *points;
         cells.sum(grid, points, location.cells(), &bands, |k| points.mass[k]);
         cells.finish_means();

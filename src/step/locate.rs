@@ -24,6 +24,10 @@ use crate::grid::GridGeometry;
 use crate::kernels::Kernels;
 use crate::shape_functions::{Footprint, Scheme};
 
+/// Points per parallel task of the per-point passes here: enough to amortise the split, and
+/// a multiple of the vector kernels' four lanes.
+const CHUNK: usize = 512;
+
 /// Where a body's points are (index = point index).
 #[derive(Component, Clone, Debug, Default)]
 pub struct Location {
@@ -55,20 +59,21 @@ impl Location {
     }
 
     /// Finds the cells of `positions` and rebuckets `bands` by them.
-    fn find_cells(&mut self, grid: &GridGeometry, positions: &[DVec2], bands: &mut Bands) {
-        let inv_h = 1.0 / grid.cell_size;
+    fn find_cells(
+        &mut self,
+        grid: &GridGeometry,
+        kernels: Kernels,
+        positions: &[DVec2],
+        bands: &mut Bands,
+    ) {
         let layout = BandLayout::of(grid);
         self.cell.resize(positions.len(), 0);
         self.band.resize(positions.len(), 0);
         self.cell
-            .par_iter_mut()
-            .zip(self.band.par_iter_mut())
-            .zip(positions.par_iter())
-            .for_each(|((c, b), x)| {
-                let [i, j] = grid.cell_at(*x, inv_h);
-                *c = (j * grid.cells[0] + i) as u32;
-                *b = layout.band_of_row(j);
-            });
+            .par_chunks_mut(CHUNK)
+            .zip(self.band.par_chunks_mut(CHUNK))
+            .zip(positions.par_chunks(CHUNK))
+            .for_each(|((c, b), x)| kernels.cells(grid, &layout, x, c, b));
         bands.rebuild(layout, &self.band);
     }
 
@@ -77,10 +82,11 @@ impl Location {
     pub fn find_cells_after_move(
         &mut self,
         grid: &GridGeometry,
+        kernels: Kernels,
         points: &Mut<Points>,
         bands: &mut Bands,
     ) {
-        self.find_cells(grid, &points.position, bands);
+        self.find_cells(grid, kernels, &points.position, bands);
         self.found_for = Some(points.last_changed());
     }
 
@@ -101,14 +107,11 @@ pub fn locate_points<S: Scheme>(
     for (points, mut location, mut bands) in &mut bodies {
         let location = &mut *location;
         if location.found_for.take() != Some(points.last_changed()) {
-            location.find_cells(grid, &points.position, &mut bands);
+            location.find_cells(grid, *kernels, &points.position, &mut bands);
         }
         location
             .footprint
             .resize(points.len(), Footprint::default());
-        // Chunks of a few hundred points: enough to amortise the parallel split, and a
-        // multiple of the vector kernels' four lanes.
-        const CHUNK: usize = 512;
         location
             .footprint
             .par_chunks_mut(CHUNK)
