@@ -1,12 +1,18 @@
 //! The move: positions by the advection velocity, volumes by `exp(dt tr L)`, walls and open
 //! sides, and the per-point density.
+//!
+//! Most points in most steps meet no wall: with AVX2 (`Kernels::avx2`) such points go four at
+//! a time through `avx2::move_four`, the per-point rule's operations in its order, so the
+//! state is the same to the bit (docs/BENCHMARKS.md, "Lanes over points where a pass is a
+//! batch").
 
 use bevy_ecs::prelude::*;
-use glam::DVec2;
+use glam::{DMat2, DVec2};
 use rayon::prelude::*;
 
 use crate::body::Points;
 use crate::grid::GridGeometry;
+use crate::kernels::Kernels;
 use crate::obstacle::Obstacles;
 
 use crate::resources::{Boundaries, Clock, Side, Wall, Walls};
@@ -62,23 +68,28 @@ pub fn advect_points(
     clock: Res<Clock>,
     walls: Res<Boundaries>,
     obstacles: Res<Obstacles>,
+    kernels: Res<Kernels>,
     mut bodies: Query<&mut Points>,
 ) {
     let (dt, grid) = (clock.dt, &*grid);
     let w = &walls.0;
     let obstacles = &*obstacles;
     if !w.segments.is_empty() {
-        return move_points(&mut bodies, grid, dt, obstacles, |p| {
+        return move_points(&mut bodies, grid, dt, obstacles, None, |p| {
             cross_segments(grid, w, p)
         });
     }
     let (min, max) = kept_box(grid, w);
+    // The lanes move a point only where nothing but the advection and the volume applies:
+    // no period to wrap across, no obstacle, and (checked per group) no side reached.
+    let lanes = (kernels.avx2() && grid.periodic == [false, false] && obstacles.is_empty())
+        .then_some(KeptBox { min, max });
     // Per axis: whether leaving through the low / high side retires the point.
     let open = [
         [w.left == Wall::Open, w.right == Wall::Open],
         [w.bottom == Wall::Open, w.top == Wall::Open],
     ];
-    move_points(&mut bodies, grid, dt, obstacles, |p| {
+    move_points(&mut bodies, grid, dt, obstacles, lanes, |p| {
         *p.x = p.moved.clamp(min, max);
         for a in 0..2 {
             let (below, above) = (p.moved[a] < min[a], p.moved[a] > max[a]);
@@ -115,57 +126,206 @@ impl Moving<'_> {
     }
 }
 
+/// The box a point stays in, strictly inside which the walls change nothing
+/// ([`kept_box`]); made for the lanes only where `Kernels::avx2` is true.
+#[derive(Clone, Copy)]
+struct KeptBox {
+    min: DVec2,
+    max: DVec2,
+}
+
+/// Points per parallel task of the move.
+const CHUNK: usize = 512;
+
 /// Moves every live point of every body by `dt` times its advection velocity, updates its
 /// volume, hands it to `walls` to place it (set `x`) against the sides, then stops it at the
-/// obstacles; retired points stay parked.
+/// obstacles; retired points stay parked. With `lanes`, four points at a time go through
+/// [`avx2::move_four`] instead where all four have mass, a volume change below `1e-3` and a
+/// new position strictly inside the box: the same operations, so the same bits.
 fn move_points(
     bodies: &mut Query<&mut Points>,
     grid: &GridGeometry,
     dt: f64,
     obstacles: &Obstacles,
+    lanes: Option<KeptBox>,
     walls: impl Fn(&mut Moving) + Send + Sync,
 ) {
+    let one = |x: &mut DVec2,
+               v: &mut DVec2,
+               vol: &mut f64,
+               m: &mut f64,
+               t: &mut Stress,
+               adv: DVec2,
+               l: &DMat2| {
+        if *m == 0.0 {
+            *v = DVec2::ZERO;
+            *t = Stress::ZERO;
+            return;
+        }
+        let from = *x;
+        let moved = grid.wrap(from + dt * adv);
+        *vol *= exp_of_increment(dt * (l.x_axis.x + l.y_axis.y));
+        walls(&mut Moving {
+            moved,
+            x,
+            v,
+            vol,
+            m,
+            t,
+        });
+        if !obstacles.is_empty() && *m != 0.0 {
+            *x = obstacles.stop(from, *x, v);
+        }
+    };
     for mut points in bodies.iter_mut() {
         let points = &mut *points;
         points
             .position
-            .par_iter_mut()
-            .zip(points.velocity.par_iter_mut())
-            .zip(points.volume.par_iter_mut())
-            .zip(points.mass.par_iter_mut().zip(points.stress.par_iter_mut()))
+            .par_chunks_mut(CHUNK)
+            .zip(points.velocity.par_chunks_mut(CHUNK))
+            .zip(points.volume.par_chunks_mut(CHUNK))
+            .zip(
+                points
+                    .mass
+                    .par_chunks_mut(CHUNK)
+                    .zip(points.stress.par_chunks_mut(CHUNK)),
+            )
             .zip(
                 points
                     .advection
-                    .par_iter()
-                    .zip(points.velocity_gradient.par_iter()),
+                    .par_chunks(CHUNK)
+                    .zip(points.velocity_gradient.par_chunks(CHUNK)),
             )
-            .for_each(|((((x, v), vol), (m, t)), (&adv, l))| {
-                if *m == 0.0 {
-                    // Retired earlier: stays parked.
-                    *v = DVec2::ZERO;
-                    *t = Stress::ZERO;
-                    return;
+            .for_each(|((((x, v), vol), (m, t)), (adv, l))| {
+                let mut k = 0;
+                #[cfg(target_arch = "x86_64")]
+                if let Some(kept) = lanes {
+                    while k + 4 <= x.len() {
+                        let group = k..k + 4;
+                        // SAFETY: `lanes` is made only where `Kernels::avx2` is true, after
+                        // the processor was found to have AVX2.
+                        let moved = unsafe {
+                            avx2::move_four(
+                                dt,
+                                kept,
+                                four(&mut x[group.clone()]),
+                                four(&mut vol[group.clone()]),
+                                four(&m[group.clone()]),
+                                four(&adv[group.clone()]),
+                                four(&l[group.clone()]),
+                            )
+                        };
+                        if !moved {
+                            for j in group {
+                                one(
+                                    &mut x[j],
+                                    &mut v[j],
+                                    &mut vol[j],
+                                    &mut m[j],
+                                    &mut t[j],
+                                    adv[j],
+                                    &l[j],
+                                );
+                            }
+                        }
+                        k += 4;
+                    }
                 }
-                let from = *x;
-                let moved = grid.wrap(from + dt * adv);
-                *vol *= exp_of_increment(dt * (l.x_axis.x + l.y_axis.y));
-                walls(&mut Moving {
-                    moved,
-                    x,
-                    v,
-                    vol,
-                    m,
-                    t,
-                });
-                if !obstacles.is_empty() && *m != 0.0 {
-                    *x = obstacles.stop(from, *x, v);
+                for j in k..x.len() {
+                    one(
+                        &mut x[j],
+                        &mut v[j],
+                        &mut vol[j],
+                        &mut m[j],
+                        &mut t[j],
+                        adv[j],
+                        &l[j],
+                    );
                 }
             });
     }
 }
 
-/// The walls with segments: a point that crosses a side meets the condition at the place it
-/// crosses (kept in by `Slip` and `NoSlip`, retired by `Open`, let go by `Free`).
+/// Four consecutive entries as an array (the lanes' unit).
+#[cfg(target_arch = "x86_64")]
+fn four<S: TryInto<T>, T>(slice: S) -> T {
+    slice.try_into().ok().expect("four entries")
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+    use std::arch::x86_64::*;
+
+    /// Moves four points (two per 256-bit register: `[x0, y0, x1, y1]`) and updates their
+    /// volumes, if all four have mass, a volume increment `dt tr L` below `1e-3` in magnitude
+    /// (the polynomial branch of [`exp_of_increment`]) and a new position strictly inside
+    /// `kept` (where the walls' clamp is the identity and no velocity is stopped); returns
+    /// whether it did. Every operation is the scalar path's, in its order.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn move_four(
+        dt: f64,
+        kept: KeptBox,
+        x: &mut [DVec2; 4],
+        vol: &mut [f64; 4],
+        m: &[f64; 4],
+        adv: &[DVec2; 4],
+        l: &[DMat2; 4],
+    ) -> bool {
+        let zero = _mm256_setzero_pd();
+        let massless = _mm256_cmp_pd::<_CMP_EQ_OQ>(_mm256_setr_pd(m[0], m[1], m[2], m[3]), zero);
+        if _mm256_movemask_pd(massless) != 0 {
+            return false;
+        }
+        let pair = |a: DVec2, b: DVec2| _mm256_setr_pd(a.x, a.y, b.x, b.y);
+        let step = _mm256_set1_pd(dt);
+        let moved = [
+            _mm256_add_pd(pair(x[0], x[1]), _mm256_mul_pd(step, pair(adv[0], adv[1]))),
+            _mm256_add_pd(pair(x[2], x[3]), _mm256_mul_pd(step, pair(adv[2], adv[3]))),
+        ];
+        let (lo, hi) = (pair(kept.min, kept.min), pair(kept.max, kept.max));
+        let inside = |p: __m256d| {
+            _mm256_movemask_pd(_mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GT_OQ>(p, lo),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(p, hi),
+            )) == 0b1111
+        };
+        if !(inside(moved[0]) && inside(moved[1])) {
+            return false;
+        }
+        let trace = |k: usize| l[k].x_axis.x + l[k].y_axis.y;
+        let z = _mm256_mul_pd(step, _mm256_setr_pd(trace(0), trace(1), trace(2), trace(3)));
+        let small = _mm256_cmp_pd::<_CMP_LT_OQ>(
+            _mm256_andnot_pd(_mm256_set1_pd(-0.0), z),
+            _mm256_set1_pd(1e-3),
+        );
+        if _mm256_movemask_pd(small) != 0b1111 {
+            return false;
+        }
+        // `exp_of_increment`'s polynomial, term by term.
+        let c = |v: f64| _mm256_set1_pd(v);
+        let mut e = _mm256_add_pd(c(1.0 / 24.0), _mm256_mul_pd(z, c(1.0 / 120.0)));
+        e = _mm256_add_pd(c(1.0 / 6.0), _mm256_mul_pd(z, e));
+        e = _mm256_add_pd(c(0.5), _mm256_mul_pd(z, e));
+        e = _mm256_add_pd(c(1.0), _mm256_mul_pd(z, e));
+        e = _mm256_add_pd(c(1.0), _mm256_mul_pd(z, e));
+        let v = _mm256_mul_pd(_mm256_setr_pd(vol[0], vol[1], vol[2], vol[3]), e);
+        let mut out = [[0.0; 4]; 3];
+        // SAFETY: each row of `out` holds four f64.
+        unsafe {
+            _mm256_storeu_pd(out[0].as_mut_ptr(), moved[0]);
+            _mm256_storeu_pd(out[1].as_mut_ptr(), moved[1]);
+            _mm256_storeu_pd(out[2].as_mut_ptr(), v);
+        }
+        for k in 0..4 {
+            let row = &out[k / 2];
+            x[k] = DVec2::new(row[2 * (k % 2)], row[2 * (k % 2) + 1]);
+            vol[k] = out[2][k];
+        }
+        true
+    }
+}
+
 fn cross_segments(grid: &GridGeometry, w: &Walls, p: &mut Moving) {
     let (lo, hi) = (grid.origin, grid.max());
     let mut kept = p.moved;
