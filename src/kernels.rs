@@ -1,4 +1,5 @@
-//! Vector kernels: which one this processor runs, and the gather over packed nodes.
+//! Vector kernels: which one this processor runs, the gather over packed nodes, and the
+//! per-point passes over four points at a time.
 //!
 //! The step's per-point work is written per point, and the compiler fills the baseline
 //! target's 128-bit registers with a point's two components. Wider registers need the data
@@ -15,8 +16,15 @@
 //! nodes are neighbours in memory, so the first two take one 256-bit read-modify-write per
 //! nodal array.
 //!
-//! The packed kernel forms every sum in the same order as [`Footprint::gather`], with no
-//! fused multiply-add, so the state is the same to the last bit whichever kernel runs
+//! Lanes over points do pay where a pass reads only each point's own columns, in memory
+//! order, and writes only its own results: no transposes of node data. The footprints
+//! ([`Kernels::footprints`]) and the cell search ([`Kernels::cells`]) run so here, and the
+//! move in `step::scatter_gather::advect` (docs/BENCHMARKS.md, "Lanes over points where a
+//! pass is a batch").
+//!
+//! Every kernel forms each value with the scalar path's operations in its order (the packed
+//! gather its sums in the order of [`Footprint::gather`]), with no fused multiply-add, so
+//! the state is the same to the last bit whichever kernel runs
 //! (`tests/invariants/determinism.rs` runs every shipped scene both ways). The choice is the
 //! world's [`Kernels`] resource: the widest the processor has, unless the environment
 //! variable `REGOLITH_KERNELS=scalar` asks for the reference path (for comparisons and
@@ -77,7 +85,7 @@ impl Kernels {
 
     /// Every point's footprint: `out[p]` is `Footprint::new::<S>(grid, positions[p],
     /// half_widths[p])` to the bit. With AVX2, fixed-extent CPDI's are built four points at
-    /// a time (`avx2::cpdi_footprints`); the other schemes, per point.
+    /// a time (`avx2_points::cpdi_footprints`); the other schemes, per point.
     pub fn footprints<S: Scheme>(
         self,
         grid: &GridGeometry,
@@ -90,7 +98,7 @@ impl Kernels {
         if self.avx2() && std::any::TypeId::of::<S>() == std::any::TypeId::of::<CpdiFixed>() {
             // SAFETY: `Kernels::avx2` is true only after the processor was found to have
             // AVX2 (`Kernels::widest`).
-            unsafe { avx2_footprints::cpdi_footprints(grid, positions, half_widths, out) };
+            unsafe { avx2_points::cpdi_footprints(grid, positions, half_widths, out) };
             return;
         }
         for ((f, x), &a) in out.iter_mut().zip(positions).zip(half_widths) {
@@ -115,7 +123,7 @@ impl Kernels {
         if self.avx2() {
             // SAFETY: `Kernels::avx2` is true only after the processor was found to have
             // AVX2 (`Kernels::widest`).
-            unsafe { avx2_footprints::cells(grid, inv_h, layout, positions, cells, bands) };
+            unsafe { avx2_points::cells(grid, inv_h, layout, positions, cells, bands) };
             return;
         }
         for ((c, b), x) in cells.iter_mut().zip(bands.iter_mut()).zip(positions) {
@@ -265,8 +273,10 @@ fn cell_and_band(grid: &GridGeometry, inv_h: f64, layout: &BandLayout, x: DVec2)
     ((j * grid.cells[0] + i) as u32, layout.band_of_row(j))
 }
 
+/// The per-point passes, four points at a time: lane `j` of a register is point `j` of a
+/// group.
 #[cfg(target_arch = "x86_64")]
-mod avx2_footprints {
+mod avx2_points {
     use super::*;
     use std::arch::x86_64::*;
 
