@@ -80,10 +80,15 @@ pub fn advect_points(
         });
     }
     let (min, max) = kept_box(grid, w);
-    // The lanes move a point only where nothing but the advection and the volume applies:
-    // no period to wrap across, no obstacle, and (checked per group) no side reached.
-    let lanes = (kernels.avx2() && grid.periodic == [false, false] && obstacles.is_empty())
-        .then_some(KeptBox { min, max });
+    // The lanes move a point only where nothing but the advection and the volume apply: no
+    // obstacle, and (checked per group) no side reached and no period crossed.
+    let lanes = (kernels.avx2() && obstacles.is_empty()).then_some(KeptBox {
+        min,
+        max,
+        periodic: grid.periodic,
+        origin: grid.origin,
+        size: grid.size(),
+    });
     // Per axis: whether leaving through the low / high side retires the point.
     let open = [
         [w.left == Wall::Open, w.right == Wall::Open],
@@ -127,11 +132,15 @@ impl Moving<'_> {
 }
 
 /// The box a point stays in, strictly inside which the walls change nothing
-/// ([`kept_box`]); made for the lanes only where `Kernels::avx2` is true.
+/// ([`kept_box`]), and the grid's periods ([`GridGeometry::wrap`]); made for the lanes only
+/// where `Kernels::avx2` is true.
 #[derive(Clone, Copy)]
 struct KeptBox {
     min: DVec2,
     max: DVec2,
+    periodic: [bool; 2],
+    origin: DVec2,
+    size: DVec2,
 }
 
 /// Points per parallel task of the move.
@@ -141,7 +150,8 @@ const CHUNK: usize = 512;
 /// volume, hands it to `walls` to place it (set `x`) against the sides, then stops it at the
 /// obstacles; retired points stay parked. With `lanes`, four points at a time go through
 /// [`avx2::move_four`] instead where all four have mass, a volume change below `1e-3` and a
-/// new position strictly inside the box: the same operations, so the same bits.
+/// new position strictly inside the box and within one period: the same operations, so the
+/// same bits.
 fn move_points(
     bodies: &mut Query<&mut Points>,
     grid: &GridGeometry,
@@ -260,8 +270,10 @@ mod avx2 {
     /// Moves four points (two per 256-bit register: `[x0, y0, x1, y1]`) and updates their
     /// volumes, if all four have mass, a volume increment `dt tr L` below `1e-3` in magnitude
     /// (the polynomial branch of [`exp_of_increment`]) and a new position strictly inside
-    /// `kept` (where the walls' clamp is the identity and no velocity is stopped); returns
-    /// whether it did. Every operation is the scalar path's, in its order.
+    /// `kept` (where the walls' clamp is the identity and no velocity is stopped), on a
+    /// periodic axis within the period that starts at the origin (where `GridGeometry::wrap`
+    /// gives `origin + (x - origin)`, its remainder being the identity); returns whether it
+    /// did. Every operation is the scalar path's, in its order.
     #[target_feature(enable = "avx2")]
     pub(super) fn move_four(
         dt: f64,
@@ -284,15 +296,30 @@ mod avx2 {
             _mm256_add_pd(pair(x[2], x[3]), _mm256_mul_pd(step, pair(adv[2], adv[3]))),
         ];
         let (lo, hi) = (pair(kept.min, kept.min), pair(kept.max, kept.max));
-        let inside = |p: __m256d| {
-            _mm256_movemask_pd(_mm256_and_pd(
+        let (origin, size) = (pair(kept.origin, kept.origin), pair(kept.size, kept.size));
+        let [px, py] = kept
+            .periodic
+            .map(|p| if p { f64::from_bits(u64::MAX) } else { 0.0 });
+        let periodic = _mm256_setr_pd(px, py, px, py);
+        // Each lane's place after the wrap, or `None` if a lane leaves the box or its period.
+        let placed = |p: __m256d| {
+            let d = _mm256_sub_pd(p, origin);
+            let within_period = _mm256_and_pd(
+                _mm256_cmp_pd::<_CMP_GE_OQ>(d, _mm256_setzero_pd()),
+                _mm256_cmp_pd::<_CMP_LT_OQ>(d, size),
+            );
+            let inside = _mm256_and_pd(
                 _mm256_cmp_pd::<_CMP_GT_OQ>(p, lo),
                 _mm256_cmp_pd::<_CMP_LT_OQ>(p, hi),
-            )) == 0b1111
+            );
+            let ok = _mm256_blendv_pd(inside, within_period, periodic);
+            (_mm256_movemask_pd(ok) == 0b1111)
+                .then(|| _mm256_blendv_pd(p, _mm256_add_pd(origin, d), periodic))
         };
-        if !(inside(moved[0]) && inside(moved[1])) {
+        let (Some(first), Some(second)) = (placed(moved[0]), placed(moved[1])) else {
             return false;
-        }
+        };
+        let moved = [first, second];
         let trace = |k: usize| l[k].x_axis.x + l[k].y_axis.y;
         let z = _mm256_mul_pd(step, _mm256_setr_pd(trace(0), trace(1), trace(2), trace(3)));
         let small = _mm256_cmp_pd::<_CMP_LT_OQ>(
@@ -366,7 +393,86 @@ fn exp_of_increment(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::exp_of_increment;
+    use super::*;
+    use bevy_ecs::system::RunSystemOnce;
+
+    /// The move with whichever kernels this processor has gives the per-point move's state to
+    /// the bit: points crossing a periodic seam (on either side, so the wrap moves them by a
+    /// period), reaching and passing slip, no-slip and open walls, massless, with volume
+    /// increments on both sides of the polynomial's range, on grids periodic along none, one
+    /// or both axes and with an origin off zero (so that `origin + (x - origin)` is not `x`).
+    #[test]
+    fn the_four_point_move_is_the_per_point_move_to_the_bit() {
+        let mut seed = 17u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for periodic in [[false, false], [true, false], [true, true]] {
+            let grid = GridGeometry {
+                origin: DVec2::new(-0.37, 0.113),
+                cell_size: 0.05,
+                cells: [12, 9],
+                periodic,
+            };
+            let side = |a: usize, wall: Wall| if periodic[a] { Wall::Periodic } else { wall };
+            let walls = Walls {
+                left: side(0, Wall::Slip),
+                right: side(0, Wall::Open),
+                bottom: side(1, Wall::NoSlip),
+                top: side(1, Wall::Free),
+                segments: Vec::new(),
+            };
+            let (lo, size) = (grid.origin, grid.size());
+            let mut points = Points::default();
+            for k in 0..4001 {
+                let u = DVec2::new(next(), next());
+                // Most points well inside; some within a step of a side.
+                let at = if k % 3 == 0 {
+                    DVec2::new(u.x.round(), u.y.round())
+                } else {
+                    u
+                };
+                points.position.push(lo + at * size);
+                points
+                    .advection
+                    .push(DVec2::new(next() - 0.5, next() - 0.5) * 40.0);
+                points.velocity.push(DVec2::new(next() - 0.5, next() - 0.5));
+                points
+                    .mass
+                    .push(if k % 97 == 5 { 0.0 } else { 1.0 + next() });
+                points.volume.push(1e-4 * (1.0 + next()));
+                points.stress.push(Stress::isotropic(-next()));
+                let rate = if k % 41 == 7 { 30.0 } else { 0.3 } * (next() - 0.5);
+                points.velocity_gradient.push(DMat2::from_cols(
+                    DVec2::new(rate, next()),
+                    DVec2::new(next(), rate * next()),
+                ));
+            }
+            let moved = |kernels: Kernels| {
+                let mut world = World::new();
+                world.insert_resource(grid.clone());
+                world.insert_resource(Clock {
+                    dt: 1e-3,
+                    ..Clock::start(1.0)
+                });
+                world.insert_resource(Boundaries(walls.clone()));
+                world.insert_resource(Obstacles::default());
+                world.insert_resource(kernels);
+                let body = world.spawn(points.clone()).id();
+                world.run_system_once(advect_points).unwrap();
+                let p = world.entity(body).get::<Points>().unwrap().clone();
+                format!("{:?}", (p.position, p.velocity, p.volume, p.mass, p.stress))
+            };
+            assert_eq!(
+                moved(Kernels::widest()),
+                moved(Kernels::SCALAR),
+                "periodic {periodic:?}"
+            );
+        }
+    }
 
     #[test]
     fn the_short_exponential_matches_exp_to_round_off() {
