@@ -207,11 +207,14 @@ fn move_points(
                     .zip(points.velocity_gradient.par_chunks(CHUNK)),
             )
             .for_each(|((((x, v), vol), (m, t)), (adv, l))| {
+                // Groups of four, the last one shorter; a group the lanes decline (or any
+                // group without them) is moved point by point.
                 let mut k = 0;
-                #[cfg(target_arch = "x86_64")]
-                if let Some(kept) = lanes {
-                    while k + 4 <= x.len() {
-                        let group = k..k + 4;
+                while k < x.len() {
+                    let group = k..(k + 4).min(x.len());
+                    k = group.end;
+                    #[cfg(target_arch = "x86_64")]
+                    if let Some(kept) = lanes.filter(|_| group.len() == 4) {
                         // SAFETY: `lanes` is made only where `Kernels::avx2` is true, after
                         // the processor was found to have AVX2.
                         let moved = unsafe {
@@ -225,32 +228,21 @@ fn move_points(
                                 four(&l[group.clone()]),
                             )
                         };
-                        if !moved {
-                            for j in group {
-                                one(
-                                    &mut x[j],
-                                    &mut v[j],
-                                    &mut vol[j],
-                                    &mut m[j],
-                                    &mut t[j],
-                                    adv[j],
-                                    &l[j],
-                                );
-                            }
+                        if moved {
+                            continue;
                         }
-                        k += 4;
                     }
-                }
-                for j in k..x.len() {
-                    one(
-                        &mut x[j],
-                        &mut v[j],
-                        &mut vol[j],
-                        &mut m[j],
-                        &mut t[j],
-                        adv[j],
-                        &l[j],
-                    );
+                    for j in group {
+                        one(
+                            &mut x[j],
+                            &mut v[j],
+                            &mut vol[j],
+                            &mut m[j],
+                            &mut t[j],
+                            adv[j],
+                            &l[j],
+                        );
+                    }
                 }
             });
     }
