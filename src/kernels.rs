@@ -387,10 +387,10 @@ mod avx2_points {
         let inv_h = 1.0 / grid.cell_size;
         let (x_axis, y_axis) = (Axis::of(grid, 0), Axis::of(grid, 1));
         let lanes_of = |v: [f64; 4]| _mm256_setr_pd(v[0], v[1], v[2], v[3]);
+        let inv = _mm256_set1_pd(inv_h);
         let mut groups = out.chunks_exact_mut(4);
         let mut sources = positions.chunks_exact(4).zip(half_widths.chunks_exact(4));
         for (f, (x, a)) in (&mut groups).zip(&mut sources) {
-            let inv = _mm256_set1_pd(inv_h);
             let alpha = _mm256_mul_pd(lanes_of([a[0], a[1], a[2], a[3]]), inv);
             let xs = lanes_of([x[0].x, x[1].x, x[2].x, x[3].x]);
             let ys = lanes_of([x[0].y, x[1].y, x[2].y, x[3].y]);

@@ -168,6 +168,7 @@ fn move_points(
                adv: DVec2,
                l: &DMat2| {
         if *m == 0.0 {
+            // Retired earlier: stays parked.
             *v = DVec2::ZERO;
             *t = Stress::ZERO;
             return;
@@ -316,7 +317,7 @@ mod avx2 {
         let z = _mm256_mul_pd(step, _mm256_setr_pd(trace(0), trace(1), trace(2), trace(3)));
         let small = _mm256_cmp_pd::<_CMP_LT_OQ>(
             _mm256_andnot_pd(_mm256_set1_pd(-0.0), z),
-            _mm256_set1_pd(1e-3),
+            _mm256_set1_pd(SHORT_EXP_BELOW),
         );
         if _mm256_movemask_pd(small) != 0b1111 {
             return false;
@@ -345,6 +346,8 @@ mod avx2 {
     }
 }
 
+/// The walls with segments: a point that crosses a side meets the condition at the place it
+/// crosses (kept in by `Slip` and `NoSlip`, retired by `Open`, let go by `Free`).
 fn cross_segments(grid: &GridGeometry, w: &Walls, p: &mut Moving) {
     let (lo, hi) = (grid.origin, grid.max());
     let mut kept = p.moved;
@@ -371,12 +374,16 @@ fn cross_segments(grid: &GridGeometry, w: &Walls, p: &mut Moving) {
     *p.x = kept;
 }
 
+/// The magnitude below which [`exp_of_increment`] takes its polynomial (and the move's lanes
+/// take a group of points).
+const SHORT_EXP_BELOW: f64 = 1e-3;
+
 /// `e^x` for the volume change of one step, which is small: below 1e-3 in magnitude the
 /// Taylor polynomial to `x^5` (truncation under `x^6/720 < 2e-21`, beneath f64 round-off),
 /// otherwise `exp`. The library call was 4% of a step.
 #[inline]
 fn exp_of_increment(x: f64) -> f64 {
-    if x.abs() < 1e-3 {
+    if x.abs() < SHORT_EXP_BELOW {
         1.0 + x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x * (1.0 / 120.0)))))
     } else {
         x.exp()
